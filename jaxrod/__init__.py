@@ -1,0 +1,27 @@
+"""jaxrod: dynamics and stability of an elastic rod confined in a channel with dry friction."""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from . import theory as theory
+from ._results import RESULTS as RESULTS
+from .friction import AbstractFriction as AbstractFriction
+from .friction import Coulomb as Coulomb
+from .friction import Tanh as Tanh
+from .friction import coulomb_prox as coulomb_prox
+from .integrators import AbstractFixedStep as AbstractFixedStep
+from .integrators import AbstractIntegrator as AbstractIntegrator
+from .integrators import DiffraxSmooth as DiffraxSmooth
+from .integrators import Exact as Exact
+from .integrators import ProjectedVerlet as ProjectedVerlet
+from .integrators import SymplecticEuler as SymplecticEuler
+from .models import AbstractModel as AbstractModel
+from .models import SingleMode as SingleMode
+from .models import exact_solution as exact_solution
+from .params import RodChannel as RodChannel
+from .simulate import simulate as simulate
+from .solution import Solution as Solution
+
+try:
+    __version__ = version("jaxrod")
+except PackageNotFoundError:  # pragma: no cover
+    __version__ = "0.0.0"

@@ -1,0 +1,6 @@
+from .base import AbstractFixedStep as AbstractFixedStep
+from .base import AbstractIntegrator as AbstractIntegrator
+from .exact import Exact as Exact
+from .explicit import SymplecticEuler as SymplecticEuler
+from .smooth import DiffraxSmooth as DiffraxSmooth
+from .verlet import ProjectedVerlet as ProjectedVerlet

@@ -1,0 +1,48 @@
+"""Projected (proximal) velocity Verlet: the package's default integrator."""
+
+from __future__ import annotations
+
+import equinox as eqx
+
+from ..friction import AbstractFriction, Coulomb
+from .base import AbstractFixedStep
+
+__all__ = ["ProjectedVerlet"]
+
+
+class ProjectedVerlet(AbstractFixedStep):
+    """Velocity Verlet with the friction impulse applied as an exact proximal step after each
+    half kick: kick → prox → drift → kick → prox.
+
+    With the [`jaxrod.Coulomb`][] law the friction acts on the very velocity that moves the
+    position, so a degree of freedom held by static friction has exactly zero velocity and
+    does not move at all (no creep). Second order while no velocity reverses or stops; an
+    event (stop, reversal) inside a step costs a local error of first order in the velocity,
+    so trajectories with many reversals converge at first order. Explicit: stable for
+    `dt · ω_max < 2` with ω_max the model's highest frequency; no limit from the sharp law.
+
+    **Arguments:**
+
+    - `dt`: the largest step [s] (static). The step used is the largest `h ≤ dt` that puts
+      every save time on a step.
+    - `friction`: the friction law (default [`jaxrod.Coulomb`][]); with [`jaxrod.Tanh`][] the
+      scheme is plain explicit Verlet on the smoothed law (needs `dt·f/ε ≲ 2`).
+    """
+
+    dt: float = eqx.field(static=True)
+    friction: AbstractFriction = Coulomb()
+
+    def __check_init__(self):
+        if not (isinstance(self.dt, (int, float)) and self.dt > 0):
+            raise ValueError(f"ProjectedVerlet.dt = {self.dt!r} is invalid: expected a float > 0.")
+
+    def step(self, model, q, v, t, h):
+        f_s, f_d = model.friction_bounds(t)
+        v_half = self.friction.update(v + 0.5 * h * model.acceleration(q, t), v, 0.5 * h, f_s, f_d)
+        q = q + h * v_half
+        t1 = t + h
+        f_s, f_d = model.friction_bounds(t1)
+        v = self.friction.update(
+            v_half + 0.5 * h * model.acceleration(q, t1), v_half, 0.5 * h, f_s, f_d
+        )
+        return q, v
