@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import diffrax
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from .._results import RESULTS
@@ -61,7 +62,7 @@ class DiffraxSmooth(AbstractIntegrator):
             throw=False,
         )
         qs, vs = sol.ys
-        stuck = jnp.zeros(n_save, dtype=bool) | jnp.all(vs == 0, axis=tuple(range(1, vs.ndim)))
+        stuck = jax.vmap(model.is_stuck)(qs, vs, ts)
         finite = jnp.isfinite(qs).all() & jnp.isfinite(vs).all()
         result = jnp.where(
             sol.result == diffrax.RESULTS.successful,

@@ -1,0 +1,250 @@
+import math
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from reference import event_driven_reference
+
+import jaxrod as jr
+from jaxrod import theory as th
+
+
+def exact_traj(model, A0, v0, T, n):
+    return jr.simulate(model, jr.Exact(), A0, v0, T, n_save=n)
+
+
+# -- The exact solution against an independent event-driven diffrax integration ------------
+
+@pytest.mark.parametrize(
+    "case, A0, v0, k, f_s, f_d, T, expect_stuck, min_phases",
+    [
+        ("loaded slip to stick", 0.0, 0.6, -4.0, 2.0, 2.0, 2.0, True, 1),
+        ("loaded, static > dynamic", 0.1, -0.9, -4.0, 2.6, 2.0, 2.0, True, 1),
+        ("reversals then stick", 1.0, 0.0, 25.0, 3.0, 2.0, 4.5, True, 6),
+        ("reversals, mu_s = mu_d", 0.0, 3.0, 9.0, 1.0, 1.0, 4.0, False, 3),
+        ("zero stiffness", 0.3, 0.5, 0.0, 1.0, 0.5, 2.0, True, 1),
+        ("loaded runaway", 0.0, 1.5, -4.0, 2.0, 2.0, 1.0, False, 1),
+    ],
+)
+def test_exact_matches_event_driven_reference(case, A0, v0, k, f_s, f_d, T, expect_stuck, min_phases):
+    ts = np.linspace(0.0, T, 201)
+    A_ref, v_ref, n_ref = event_driven_reference(A0, v0, k, f_s, f_d, ts)
+    sol = exact_traj(jr.SingleMode(k, f_s, f_d), A0, v0, T, 201)
+    scale = max(np.max(np.abs(A_ref)), 1e-3)
+    np.testing.assert_allclose(sol.q, A_ref, atol=1e-9 * scale)
+    np.testing.assert_allclose(sol.v, v_ref, atol=1e-9 * max(np.max(np.abs(v_ref)), 1.0))
+    assert bool(sol.stuck[-1]) == expect_stuck
+    assert n_ref >= min_phases and int(sol.n_steps) >= min_phases
+    assert int(sol.result) == jr.RESULTS.successful
+
+
+def test_exact_is_smooth_through_zero_stiffness():
+    """The Stumpff-function form has no singularity at k = 0 (values and forward gradients)."""
+    f = lambda k: jr.exact_solution(0.2, 0.7, k, 1.0, 1.0, 0.3)[0]
+    vals = [float(f(k)) for k in (-1e-9, 0.0, 1e-9)]
+    assert max(vals) - min(vals) < 1e-9
+    g = jax.jacfwd(f)(0.0)
+    fd = (f(1e-5) - f(-1e-5)) / 2e-5
+    assert bool(jnp.isfinite(g)) and float(g) == pytest.approx(float(fd), rel=1e-6)
+
+
+def test_coulomb_oscillator_keeps_period_and_loses_4f_over_k_per_cycle():
+    """PHYSICS.md §6, measured on a fine projected-Verlet run (independent of the closed form)."""
+    k, f = 16.0, 0.5  # omega = 4, amplitude drops 2f/k = 0.0625 per half cycle
+    sol = jr.simulate(jr.SingleMode(k, f, f), jr.ProjectedVerlet(1e-5), 1.0, 0.0, 4.0, n_save=40001)
+    A, ts = np.asarray(sol.q), np.asarray(sol.ts)
+    ext = [i for i in range(1, len(A) - 1) if abs(A[i]) >= abs(A[i - 1]) and abs(A[i]) > abs(A[i + 1])]
+    ext = [0] + ext
+    amps = np.abs(A[ext])
+    assert len(ext) >= 6
+    np.testing.assert_allclose(np.diff(amps)[:6], -2 * f / k, atol=2e-4)
+    np.testing.assert_allclose(np.diff(ts[ext])[:6], math.pi / 4, atol=2e-4)
+
+
+# -- Projected Verlet ------------------------------------------------------------------------
+
+def _order(model, A0, v0, T, dts):
+    ref = exact_traj(model, A0, v0, T, 11)
+    errs = []
+    for dt in dts:
+        sol = jr.simulate(model, jr.ProjectedVerlet(dt), A0, v0, T, n_save=11)
+        errs.append(float(jnp.max(jnp.abs(sol.q - ref.q))))
+    return np.polyfit(np.log(dts), np.log(errs), 1)[0], errs
+
+
+def test_projected_verlet_second_order_on_loaded_slip_to_stick():
+    model = jr.SingleMode(-4.0, 2.5, 2.0)  # k < 0, static > dynamic
+    dts = [4e-3 / 2**i for i in range(5)]
+    p, errs = _order(model, 0.0, 0.6, 3.0, dts)
+    assert exact_traj(model, 0.0, 0.6, 3.0, 2).stuck[-1]
+    assert p >= 1.8, (p, errs)
+
+
+def test_projected_verlet_first_order_with_many_reversals():
+    model = jr.SingleMode(25.0, 2.0, 2.0)
+    dts = [1e-2 / 2**i for i in range(6)]
+    p, errs = _order(model, 1.0, 0.0, 2.0, dts)
+    assert int(exact_traj(model, 1.0, 0.0, 2.0, 2).n_steps) >= 4
+    assert p >= 0.9, (p, errs)
+
+
+def test_projected_verlet_sticks_exactly():
+    model = jr.SingleMode(-4.0, 2.5, 2.0)
+    sol = jr.simulate(model, jr.ProjectedVerlet(1e-3), 0.0, 0.6, 3.0, n_save=3001)
+    stuck = np.asarray(sol.stuck)
+    first = int(np.argmax(stuck))
+    assert stuck[first:].all() and first > 0
+    assert np.all(np.asarray(sol.v)[first:] == 0.0)  # exactly zero, not small
+    assert np.all(np.asarray(sol.q)[first:] == np.asarray(sol.q)[first])  # no creep at all
+    # a state on the stick line (|kA| <= f_s) released from rest never moves
+    rest = jr.simulate(model, jr.ProjectedVerlet(1e-3), 0.6, 0.0, 5.0, n_save=51)
+    assert np.all(np.asarray(rest.q) == 0.6) and np.all(np.asarray(rest.v) == 0.0)
+
+
+def test_vmapped_classification_matches_analytic_stable_zone():
+    k, f = -4.0, 2.0
+    lam, a = 2.0, 0.5
+    dt = 3e-3
+    n = 48
+    A = jnp.linspace(-3 * a, 3 * a, n)
+    V = jnp.linspace(-3 * lam * a, 3 * lam * a, n)
+    AA, VV = (x.ravel() for x in jnp.meshgrid(A, V))
+    model = jr.SingleMode(k, f, f)
+
+    def stable(q0, v0):
+        sol = jr.simulate(model, jr.ProjectedVerlet(dt), q0, v0, 15.0, n_save=2, throw=False)
+        return sol.stuck[-1]
+
+    num = np.asarray(jax.vmap(stable)(AA, VV))
+    zone = np.asarray(th.in_stable_zone(AA, VV, k, f))
+    # Band: points whose analytic label changes within two steps' worth of phase-plane motion.
+    d = 2 * lam * dt
+    near = np.zeros_like(zone)
+    for sa in (-1, 0, 1):
+        for sv in (-1, 0, 1):
+            near |= np.asarray(th.in_stable_zone(AA + sa * d * a, VV + sv * d * lam * a, k, f)) != zone
+    assert zone.sum() > 100 and (~zone).sum() > 100
+    assert near.mean() < 0.1
+    np.testing.assert_array_equal(num[~near], zone[~near])
+
+
+@pytest.mark.parametrize("T", [0.3, 3.0])  # mid-slip, and after the mode has stuck
+def test_projected_verlet_gradients_match_finite_differences(T):
+    def final(p):
+        k, f, v0 = p
+        sol = jr.simulate(jr.SingleMode(k, f, f), jr.ProjectedVerlet(1e-3), 0.05, v0, T,
+                          n_save=2, throw=False)
+        return jnp.stack([sol.q[-1], sol.v[-1]])
+
+    p0 = jnp.array([-4.0, 2.0, 0.6])
+    J_fwd = jax.jacfwd(final)(p0)
+    J_rev = jax.jacrev(final)(p0)
+    h = 1e-6
+    J_fd = jnp.stack([(final(p0.at[i].add(h)) - final(p0.at[i].add(-h))) / (2 * h) for i in range(3)], 1)
+    np.testing.assert_allclose(J_fwd, J_rev, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(J_fwd, J_fd, rtol=1e-5, atol=1e-8)
+    assert float(jnp.abs(J_fwd[0]).max()) > 0
+
+
+def test_vmap_equals_loop_and_never_retraces():
+    v0s = jnp.array([0.2, 0.6, 0.9, 1.4])
+    ks = jnp.array([-4.0, -3.0, -5.0, 2.0])
+
+    @eqx.filter_jit
+    @eqx.debug.assert_max_traces(max_traces=1)
+    def batch(ks, v0s):
+        run = lambda k, v0: jr.simulate(jr.SingleMode(k, 2.0, 2.0), jr.ProjectedVerlet(1e-3), 0.0, v0, 2.0, n_save=5, throw=False).q
+        return jax.vmap(run)(ks, v0s)
+
+    out = batch(ks, v0s)
+    batch(ks * 1.1, v0s * 0.9)  # new values, same shapes: no retrace
+    for i in range(4):
+        single = jr.simulate(jr.SingleMode(ks[i], 2.0, 2.0), jr.ProjectedVerlet(1e-3), 0.0, v0s[i], 2.0, n_save=5)
+        np.testing.assert_array_equal(out[i], single.q)
+
+
+def test_step_above_stability_limit_is_refused():
+    model = jr.SingleMode(1e6, 1.0, 1.0)  # omega = 1000 rad/s: limit 2e-3 s
+    with pytest.raises(ValueError, match=r"ProjectedVerlet.dt = 0.003 s is above the stability limit"):
+        jr.simulate(model, jr.ProjectedVerlet(3e-3), 0.0, 1.0, 1.0)
+    with pytest.raises(ValueError, match="SymplecticEuler.dt"):
+        jr.simulate(model, jr.SymplecticEuler(3e-3), 0.0, 1.0, 1.0)
+    # Under vmap the values are traced: the member gets a result code instead.
+    run = jax.vmap(lambda k: jr.simulate(jr.SingleMode(k, 1.0, 1.0), jr.ProjectedVerlet(3e-3), 0.0, 1.0, 1.0, throw=False).result)
+    codes = run(jnp.array([1e6, 100.0]))
+    assert codes.tolist() == [jr.RESULTS.step_limit, jr.RESULTS.successful]
+    with pytest.raises(Exception, match="stability limit"):
+        jax.vmap(lambda k: jr.simulate(jr.SingleMode(k, 1.0, 1.0), jr.ProjectedVerlet(3e-3), 0.0, 1.0, 1.0).q)(jnp.array([1e6]))
+
+
+def test_bad_model_and_driver_inputs():
+    with pytest.raises(ValueError, match=r"SingleMode.f_d = .* \[0, f_s\]"):
+        jr.SingleMode(-1.0, 1.0, 2.0)
+    with pytest.raises(ValueError, match="SingleMode.f_s"):
+        jr.SingleMode(-1.0, -1.0, 0.0)
+    with pytest.raises(ValueError, match="SingleMode.k"):
+        jr.SingleMode(float("nan"), 1.0, 1.0)
+    with pytest.raises(ValueError, match="t1 = -1.0"):
+        jr.simulate(jr.SingleMode(-1.0, 1.0, 1.0), jr.ProjectedVerlet(1e-3), 0.0, 1.0, -1.0)
+    with pytest.raises(ValueError, match="n_save = 1"):
+        jr.simulate(jr.SingleMode(-1.0, 1.0, 1.0), jr.ProjectedVerlet(1e-3), 0.0, 1.0, 1.0, n_save=1)
+    with pytest.raises(ValueError, match="ProjectedVerlet.dt"):
+        jr.ProjectedVerlet(-1e-3)
+    # An invalid member inside a vmapped run is flagged, the others complete.
+    run = jax.vmap(lambda fd: jr.simulate(jr.SingleMode(-4.0, 1.0, fd), jr.ProjectedVerlet(1e-3), 0.0, 0.1, 1.0, throw=False))
+    sol = run(jnp.array([0.5, 2.0]))
+    assert sol.result.tolist() == [jr.RESULTS.successful, jr.RESULTS.invalid_input]
+
+
+# -- The documented failure cases --------------------------------------------------------------
+
+def test_explicit_sharp_sign_chatters_and_never_sticks():
+    model = jr.SingleMode(-4.0, 2.0, 2.0)
+    dt, T = 1e-3, 3.0
+    ref = exact_traj(model, 0.0, 0.6, T, 3001)
+    sol = jr.simulate(model, jr.SymplecticEuler(dt), 0.0, 0.6, T, n_save=3001)
+    t_stick = float(ref.ts[int(np.argmax(np.asarray(ref.stuck)))])
+    late = np.asarray(sol.ts) > t_stick + 0.1
+    v = np.asarray(sol.v)[late]
+    assert not np.asarray(sol.stuck).any()
+    assert np.all(v != 0.0)
+    sign_changes = np.count_nonzero(np.diff(np.sign(v)))
+    assert sign_changes > 0.4 * v.size  # chatter: a reversal every other step or so
+    assert np.max(np.abs(v)) <= 2.5 * dt * 2.0  # ... of size ~ h·f
+    # the projected scheme at the same step sticks exactly
+    pv = jr.simulate(model, jr.ProjectedVerlet(dt), 0.0, 0.6, T, n_save=3001)
+    assert np.all(np.asarray(pv.v)[late] == 0.0)
+
+
+def test_tanh_creep_turns_a_stable_loaded_state_into_runaway():
+    k, f = -4.0, 2.0  # stick line |A| <= 0.5
+    model = jr.SingleMode(k, f, f)
+    A0 = 0.25
+    assert bool(th.in_stable_zone(A0, 0.0, k, f))
+    smooth = jr.DiffraxSmooth(jr.Tanh(0.05), diffrax.Kvaerno5(), rtol=1e-8, atol=1e-10)
+    short = jr.simulate(model, smooth, A0, 0.0, 1.0, n_save=11)
+    long = jr.simulate(model, smooth, A0, 0.0, 60.0, n_save=61)
+    # short horizon: looks stuck (creeps only ~ eps |kA| / f per second)
+    assert abs(float(short.q[-1]) - A0) < 0.05
+    # long horizon: creeps off the stick line and runs away
+    assert float(jnp.abs(long.q[-1])) > 20 * f / abs(k)
+    assert not np.asarray(long.stuck)[1:].any()  # at rest only at t = 0
+    exact = jr.simulate(model, jr.Exact(), A0, 0.0, 60.0, n_save=61)
+    assert np.all(np.asarray(exact.q) == A0)
+
+
+def test_tanh_tends_to_the_sharp_law_on_short_horizons():
+    model = jr.SingleMode(25.0, 2.0, 2.0)
+    ref = exact_traj(model, 1.0, 0.0, 1.0, 21)
+    errs = []
+    for eps in (1e-1, 1e-2, 1e-3):
+        for solver in (diffrax.Tsit5(), diffrax.Kvaerno5()):
+            sol = jr.simulate(model, jr.DiffraxSmooth(jr.Tanh(eps), solver, rtol=1e-9, atol=1e-11), 1.0, 0.0, 1.0, n_save=21)
+            errs.append(float(jnp.max(jnp.abs(sol.q - ref.q))))
+    errs = np.array(errs).reshape(3, 2)
+    np.testing.assert_allclose(errs[:, 0], errs[:, 1], rtol=1e-3)  # explicit = implicit
+    assert errs[0, 0] > errs[1, 0] > errs[2, 0]
+    assert errs[2, 0] < 5e-3
