@@ -1,0 +1,3 @@
+"""Figures (host-side; matplotlib is imported lazily inside each function)."""
+
+from .phase import phase_portraits as phase_portraits

@@ -1,0 +1,88 @@
+import json
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+from jaxrod.cli import main
+
+EXPECTED_KEYS = {"F0cr_continuous", "omega0", "critical_mode", "F0_mode", "k", "f", "Adot_cr", "v_cr", "A_cr"}
+
+
+def run_json(capsys, *argv):
+    assert main(list(argv)) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_theory_json_reference_rod(capsys):
+    out = run_json(capsys, "theory", "--mu", "0.3", "--dF", "5", "--json")
+    assert EXPECTED_KEYS <= set(out)
+    # Independent hand computation (PHYSICS.md formulas).
+    EI = 77e9 * math.pi * 1.5e-3**4 / 64
+    rho = 6450 * math.pi * 1.5e-3**2 / 4
+    R, g, L = 5.125e-3, 9.81, 3.0
+    om = 6 * math.pi / L
+    F0 = EI * om**2 + rho * g / (R * om**2)
+    k = om**2 / rho * (F0 - (F0 + 5.0))
+    f = 4 * 0.3 * rho * g / (math.pi * rho * R)
+    assert out["critical_mode"] == 6
+    assert out["F0_mode"] == pytest.approx(F0, rel=1e-12)
+    assert out["F0cr_continuous"] == pytest.approx(2 * math.sqrt(rho * g * EI / R), rel=1e-12)
+    assert out["k"] == pytest.approx(k, rel=1e-10)
+    assert out["f"] == pytest.approx(f, rel=1e-12)
+    assert out["Adot_cr"] == pytest.approx(f / math.sqrt(-k), rel=1e-10)
+    assert out["v_cr"] == pytest.approx(R * f / math.sqrt(-k), rel=1e-10)
+    assert out["A_cr"] == pytest.approx(f / -k, rel=1e-10)
+
+
+def test_theory_json_mode_and_rod_options(capsys):
+    out = run_json(capsys, "theory", "--mode", "8", "--dF", "1", "--R", "0.01", "--json")
+    assert out["mode"] == 8
+    rho = 6450 * math.pi * 1.5e-3**2 / 4
+    EI = 77e9 * math.pi * 1.5e-3**4 / 64
+    om = 8 * math.pi / 3.0
+    assert out["F0_mode"] == pytest.approx(EI * om**2 + rho * 9.81 / (0.01 * om**2), rel=1e-12)
+    # below the frictionless load: no finite intercept, reported as null
+    out = run_json(capsys, "theory", "--dF", "-0.5", "--json")
+    assert out["k"] > 0 and out["Adot_cr"] is None and out["v_cr"] is None
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["theory", "--mu", "-0.1"], "--mu"),
+        (["theory", "--mu", "abc"], "--mu"),
+        (["theory", "--dF", "nan"], "--dF"),
+        (["theory", "--R", "-1"], "--R"),
+        (["theory", "--nu", "0.6"], "--nu"),
+        (["theory", "--mode", "0"], "--mode"),
+        (["theory", "--mode", "x"], "--mode"),
+    ],
+)
+def test_theory_bad_values_exit_nonzero_with_one_line(capsys, argv, option):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and option in err
+
+
+def test_console_command_is_installed():
+    exe = os.path.join(os.path.dirname(sys.executable), "jaxrod")
+    cmd = [exe] if os.path.exists(exe) else [sys.executable, "-m", "jaxrod"]
+    res = subprocess.run(cmd + ["theory", "--json"], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout)["critical_mode"] == 6
+
+
+def test_phase_figure(tmp_path):
+    from jaxrod.figures import phase_portraits
+
+    agreement = phase_portraits(str(tmp_path), n_grid=10)
+    assert (tmp_path / "phase.png").stat().st_size > 10_000
+    lines = (tmp_path / "phase.csv").read_text().splitlines()
+    assert len(lines) == 1 + 6 * 100
+    assert len(agreement) == 6
+    assert min(agreement.values()) >= 0.95
