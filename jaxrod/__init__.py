@@ -13,6 +13,8 @@ from .integrators import AbstractIntegrator as AbstractIntegrator
 from .integrators import DiffraxSmooth as DiffraxSmooth
 from .integrators import Exact as Exact
 from .integrators import ProjectedVerlet as ProjectedVerlet
+from .integrators import RunOptions as RunOptions
+from .integrators import SplitLinearFriction as SplitLinearFriction
 from .integrators import SymplecticEuler as SymplecticEuler
 from .models import AbstractModel as AbstractModel
 from .models import SingleMode as SingleMode

@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._results import RESULTS
-from .integrators.base import AbstractFixedStep, AbstractIntegrator
+from .integrators.base import AbstractFixedStep, AbstractIntegrator, RunOptions
 from .models.base import AbstractModel
 from .solution import Solution
 
@@ -27,6 +27,7 @@ def simulate(
     t1: float,
     *,
     n_save: int = 101,
+    options: RunOptions | None = None,
     throw: bool = True,
 ) -> Solution:
     """Integrate `model` from (`q0`, `v0`) at t = 0 to `t1` with `integrator`.
@@ -38,6 +39,8 @@ def simulate(
     - `q0`, `v0`: initial coordinates and velocities (rad, rad/s for modal amplitudes).
     - `t1`: final time [s], > 0 (static).
     - `n_save`: number of equally spaced save times including 0 and `t1` (static, ≥ 2).
+    - `options`: a [`jaxrod.RunOptions`][]: buckling threshold, stopping when stuck, early
+      exit from the time loop, whether to keep the full state (default `RunOptions()`).
     - `throw`: raise on a non-successful result (set `False` under `vmap`, where each
       member's `result` code says what happened).
 
@@ -63,12 +66,13 @@ def simulate(
     dtype = jnp.result_type(float)
     q0 = jnp.asarray(q0, dtype=dtype)
     v0 = jnp.asarray(v0, dtype=dtype)
-    return _simulate(model, integrator, q0, v0, float(t1), n_save, throw)
+    options = RunOptions() if options is None else options
+    return _simulate(model, integrator, q0, v0, float(t1), n_save, options, throw)
 
 
 @eqx.filter_jit
-def _simulate(model, integrator, q0, v0, t1, n_save, throw):
-    sol = integrator.integrate(model, q0, v0, t1, n_save)
+def _simulate(model, integrator, q0, v0, t1, n_save, options, throw):
+    sol = integrator.integrate(model, q0, v0, t1, n_save, options)
     result = jnp.where(model.check(), sol.result, RESULTS.invalid_input).astype(jnp.int32)
     sol = eqx.tree_at(lambda s: s.result, sol, result)
     if throw:

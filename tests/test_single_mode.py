@@ -136,7 +136,7 @@ def test_projected_verlet_gradients_match_finite_differences(T):
     def final(p):
         k, f, v0 = p
         sol = jr.simulate(jr.SingleMode(k, f, f), jr.ProjectedVerlet(1e-3), 0.05, v0, T,
-                          n_save=2, throw=False)
+                          n_save=2, throw=False, options=jr.RunOptions(early_exit=False))
         return jnp.stack([sol.q[-1], sol.v[-1]])
 
     p0 = jnp.array([-4.0, 2.0, 0.6])

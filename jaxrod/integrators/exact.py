@@ -7,8 +7,7 @@ import jax
 import jax.numpy as jnp
 
 from ..models.single_mode import SingleMode, exact_solution
-from ..solution import Solution
-from .base import AbstractIntegrator
+from .base import AbstractIntegrator, RunOptions, summarize
 
 __all__ = ["Exact"]
 
@@ -22,7 +21,7 @@ class Exact(AbstractIntegrator):
 
     max_phases: int = eqx.field(static=True, default=100_000)
 
-    def integrate(self, model, q0, v0, t1, n_save):
+    def integrate(self, model, q0, v0, t1, n_save, options=RunOptions()):
         if not isinstance(model, SingleMode):
             raise TypeError(
                 f"Exact integrates only SingleMode models, got {type(model).__name__}."
@@ -32,7 +31,8 @@ class Exact(AbstractIntegrator):
             q0, v0, model.k, model.f_s, model.f_d, t, self.max_phases
         )
         A, v, stuck, n, result = jax.vmap(fn)(ts)
-        return Solution(
-            ts=ts, q=A, v=v, stuck=stuck, result=jnp.max(result).astype(jnp.int32),
-            n_steps=jnp.max(n).astype(jnp.int32),
-        )
+        # the energy lost is exactly what friction dissipated
+        e = jax.vmap(model.energy_terms)(A, v, ts)
+        total = e["kinetic"] + e["potential"]
+        sol = summarize(model, ts, A, v, total[0] - total, options, jnp.max(n))
+        return eqx.tree_at(lambda s: s.result, sol, jnp.maximum(sol.result, jnp.max(result)))

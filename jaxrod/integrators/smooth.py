@@ -7,10 +7,8 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .._results import RESULTS
 from ..friction import AbstractFriction, Tanh
-from ..solution import Solution
-from .base import AbstractIntegrator
+from .base import AbstractIntegrator, RunOptions, summarize
 
 __all__ = ["DiffraxSmooth"]
 
@@ -38,15 +36,17 @@ class DiffraxSmooth(AbstractIntegrator):
     dt0: float = eqx.field(static=True, default=1e-5)
     max_steps: int = eqx.field(static=True, default=1_000_000)
 
-    def integrate(self, model, q0, v0, t1, n_save):
+    def integrate(self, model, q0, v0, t1, n_save, options=RunOptions()):
         dtype = jnp.result_type(float)
         q0 = jnp.asarray(q0, dtype=dtype)
         v0 = jnp.asarray(v0, dtype=dtype)
 
         def rhs(t, y, args):
-            q, v = y
-            f_s, f_d = model.friction_bounds(t)
-            return v, model.acceleration(q, t) - self.friction.acceleration(v, f_s, f_d)
+            q, v, _ = y
+            fa = model.friction_acceleration(self.friction, v, t)
+            # power dissipated = rate of kinetic energy removed by friction
+            power = jax.jvp(model.kinetic_energy, (v,), (fa,))[1]
+            return v, model.acceleration(q, t) - fa, power
 
         ts = jnp.linspace(0.0, t1, n_save, dtype=dtype)
         sol = diffrax.diffeqsolve(
@@ -55,25 +55,12 @@ class DiffraxSmooth(AbstractIntegrator):
             t0=0.0,
             t1=t1,
             dt0=self.dt0,
-            y0=(q0, v0),
+            y0=(q0, v0, jnp.zeros((), dtype)),
             saveat=diffrax.SaveAt(ts=ts),
             stepsize_controller=diffrax.PIDController(rtol=self.rtol, atol=self.atol),
             max_steps=self.max_steps,
             throw=False,
         )
-        qs, vs = sol.ys
-        stuck = jax.vmap(model.is_stuck)(qs, vs, ts)
-        finite = jnp.isfinite(qs).all() & jnp.isfinite(vs).all()
-        result = jnp.where(
-            sol.result == diffrax.RESULTS.successful,
-            jnp.where(finite, RESULTS.successful, RESULTS.nonfinite),
-            jnp.where(
-                sol.result == diffrax.RESULTS.max_steps_reached,
-                RESULTS.max_steps,
-                RESULTS.nonfinite,
-            ),
-        ).astype(jnp.int32)
-        return Solution(
-            ts=ts, q=qs, v=vs, stuck=stuck, result=result,
-            n_steps=jnp.asarray(sol.stats["num_steps"], dtype=jnp.int32),
-        )
+        qs, vs, Ds = sol.ys
+        bad = sol.result != diffrax.RESULTS.successful
+        return summarize(model, ts, qs, vs, Ds, options, sol.stats["num_steps"], bad)

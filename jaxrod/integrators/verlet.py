@@ -36,13 +36,15 @@ class ProjectedVerlet(AbstractFixedStep):
         if not (isinstance(self.dt, (int, float)) and self.dt > 0):
             raise ValueError(f"ProjectedVerlet.dt = {self.dt!r} is invalid: expected a float > 0.")
 
-    def step(self, model, q, v, t, h):
-        f_s, f_d = model.friction_bounds(t)
-        v_half = self.friction.update(v + 0.5 * h * model.acceleration(q, t), v, 0.5 * h, f_s, f_d)
+    def step(self, model, q, v, a, t, h):
+        half = 0.5 * h
+        v_trial = v + half * a
+        v_half = model.friction_update(self.friction, v_trial, v, half, t)
+        lost = model.kinetic_energy(v_trial) - model.kinetic_energy(v_half)
         q = q + h * v_half
         t1 = t + h
-        f_s, f_d = model.friction_bounds(t1)
-        v = self.friction.update(
-            v_half + 0.5 * h * model.acceleration(q, t1), v_half, 0.5 * h, f_s, f_d
-        )
-        return q, v
+        a = model.acceleration(q, t1)
+        v_trial = v_half + half * a
+        v = model.friction_update(self.friction, v_trial, v_half, half, t1)
+        lost = lost + model.kinetic_energy(v_trial) - model.kinetic_energy(v)
+        return q, v, a, lost

@@ -3,48 +3,82 @@
 from __future__ import annotations
 
 import abc
+import math
 
 import equinox as eqx
-from jaxtyping import Array, Float
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float
 
 __all__ = ["AbstractModel"]
 
 
 class AbstractModel(eqx.Module):
-    """A mechanical system `q̈ = a(q, t) − friction(q̇)` with friction acting per degree of
-    freedom as a bounded acceleration.
+    """A mechanical system `M q̈ = −∇V(q, t) − friction(q̇)`, M constant and diagonal, with
+    friction a bounded force per friction point.
 
-    Integrators only use these methods, so any model that implements them runs with every
-    integrator. The coordinates are scaled so that the mass matrix is the identity.
+    Integrators use only these methods, so any model that implements them runs with every
+    integrator. `acceleration` and the friction bounds are in the model's coordinates with the
+    mass scaled out; energies are in the model's energy unit (J for the rod models).
     """
 
     @abc.abstractmethod
     def acceleration(self, q: Float[Array, "..."], t) -> Float[Array, "..."]:
-        """The conservative (elastic + load + gravity) acceleration at `q`, time `t`."""
+        """The conservative (elastic + load + gravity) acceleration −M⁻¹∇V at `q`, time `t`."""
 
     @abc.abstractmethod
     def friction_bounds(self, t) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
         """Static and dynamic friction bounds per degree of freedom, as accelerations."""
 
     @abc.abstractmethod
-    def potential_energy(self, q: Float[Array, "..."], t) -> Float[Array, ""]:
-        """Potential energy (per unit of the model's mass scaling) at `q`."""
+    def energy_terms(self, q, v, t) -> dict[str, Float[Array, ""]]:
+        """Named energies (kinetic and the potential parts) at a state."""
+
+    @abc.abstractmethod
+    def kinetic_energy(self, v: Float[Array, "..."]) -> Float[Array, ""]:
+        """Kinetic energy of the velocities `v`."""
 
     @abc.abstractmethod
     def max_frequency(self) -> Float[Array, ""]:
         """The highest angular frequency of the conservative part [rad/s]; a fixed-step
         explicit integrator is stable for `dt · max_frequency < 2`."""
 
-    def kinetic_energy(self, v: Float[Array, "..."]) -> Float[Array, ""]:
-        """Kinetic energy ½|v|² in the model's mass scaling."""
-        return 0.5 * (v * v).sum()
+    # -- defaults that models with per-DOF friction and a constant load inherit ----------------
 
-    def is_stuck(self, q, v, t):
+    @property
+    def autonomous(self) -> bool:
+        """Whether the forces do not depend on time (a stuck state then stays stuck)."""
+        return True
+
+    @property
+    def buckle_threshold(self) -> float:
+        """Default amplitude past which the run counts as buckled and stops (`inf`: never)."""
+        return math.inf
+
+    def amplitude(self, q) -> Float[Array, ""]:
+        """The largest deflection of the state (rad)."""
+        return jnp.max(jnp.abs(q))
+
+    def friction_update(self, friction, v_trial, v_prev, h, t):
+        """Velocity after the friction impulse of a step `h` (per-DOF law)."""
+        f_s, f_d = self.friction_bounds(t)
+        return friction.update(v_trial, v_prev, h, f_s, f_d)
+
+    def friction_acceleration(self, friction, v, t):
+        """The friction acceleration opposing `v`, for ODE solvers (per-DOF law)."""
+        f_s, f_d = self.friction_bounds(t)
+        return friction.acceleration(v, f_s, f_d)
+
+    def is_stuck(self, q, v, t) -> Bool[Array, ""]:
         """Whether the whole system is at rest and held by static friction."""
         f_s, _ = self.friction_bounds(t)
         a = self.acceleration(q, t)
-        return (v == 0).all() & (abs(a) <= f_s).all()
+        return jnp.all(v == 0) & jnp.all(jnp.abs(a) <= f_s)
 
-    def check(self):
-        """Boolean scalar: whether the model's parameters are valid (for result codes)."""
-        return True
+    def linear_flow(self, q, v, t, h):
+        """Exact flow of the conservative (linear) part over `h`; only needed by the
+        documented failure case [`jaxrod.SplitLinearFriction`][]."""
+        raise NotImplementedError(f"{type(self).__name__} has no exact linear flow.")
+
+    def check(self) -> Bool[Array, ""]:
+        """Whether the model's parameters are valid (for result codes under vmap)."""
+        return jnp.array(True)

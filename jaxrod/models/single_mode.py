@@ -90,11 +90,19 @@ class SingleMode(AbstractModel):
     def friction_bounds(self, t):
         return self.f_s, self.f_d
 
-    def potential_energy(self, q, t):
-        return 0.5 * self.k * q**2
+    def kinetic_energy(self, v):
+        return 0.5 * jnp.sum(v * v)
+
+    def energy_terms(self, q, v, t):
+        """Per unit modal mass [rad²/s²]: kinetic ½Ȧ² and potential ½kA²."""
+        return {"kinetic": self.kinetic_energy(v), "potential": 0.5 * jnp.sum(self.k * q * q)}
 
     def max_frequency(self):
         return jnp.sqrt(jnp.maximum(self.k, 0.0))
+
+    def linear_flow(self, q, v, t, h):
+        c0, c1, _ = _stumpff(self.k * h**2)
+        return q * c0 + v * h * c1, v * c0 - self.k * q * h * c1
 
     def check(self):
         return (
