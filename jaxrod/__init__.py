@@ -16,7 +16,13 @@ from .integrators import ProjectedVerlet as ProjectedVerlet
 from .integrators import RunOptions as RunOptions
 from .integrators import SplitLinearFriction as SplitLinearFriction
 from .integrators import SymplecticEuler as SymplecticEuler
+from . import modal as modal
+from .loads import AbstractLoad as AbstractLoad
+from .loads import ConstantLoad as ConstantLoad
+from .loads import RampLoad as RampLoad
 from .models import AbstractModel as AbstractModel
+from .models import FieldModel as FieldModel
+from .models import GalerkinModel as GalerkinModel
 from .models import SingleMode as SingleMode
 from .models import exact_solution as exact_solution
 from .params import RodChannel as RodChannel
