@@ -17,6 +17,13 @@ from .integrators import RunOptions as RunOptions
 from .integrators import SplitLinearFriction as SplitLinearFriction
 from .integrators import SymplecticEuler as SymplecticEuler
 from . import modal as modal
+from . import perturbations as perturbations
+from . import search as search
+from .perturbations import RandomForce as RandomForce
+from .perturbations import RandomShape as RandomShape
+from .perturbations import RandomVelocity as RandomVelocity
+from .perturbations import SineVelocity as SineVelocity
+from .perturbations import UserState as UserState
 from .loads import AbstractLoad as AbstractLoad
 from .loads import ConstantLoad as ConstantLoad
 from .loads import RampLoad as RampLoad

@@ -53,6 +53,14 @@ class AbstractIntegrator(eqx.Module):
         return jnp.inf
 
 
+def friction_work(model, v_prev, v_trial, v_after):
+    """Energy friction dissipated by an impulse that took `v_trial` to `v_after` over a
+    (half) step that began at velocity `v_prev`: the impulse times the mean velocity over the
+    step, (v_trial − v_after)·M·(v_prev + v_after)/2 (a midpoint rule for ∫ f|v| dt). Zero for
+    a point held at rest: it does not move, so friction does no work on it."""
+    return jax.jvp(model.kinetic_energy, (0.5 * (v_prev + v_after),), (v_trial - v_after,))[1]
+
+
 def save_grid(t1: float, n_save: int, dt: float) -> tuple[int, float]:
     """Steps per save interval and the step actually used: the largest h ≤ `dt` that puts
     every save time on a step."""

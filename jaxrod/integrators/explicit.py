@@ -6,7 +6,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from ..friction import AbstractFriction, Coulomb
-from .base import AbstractFixedStep
+from .base import AbstractFixedStep, friction_work
 
 __all__ = ["SymplecticEuler", "SplitLinearFriction"]
 
@@ -33,8 +33,9 @@ class SymplecticEuler(AbstractFixedStep):
 
     def step(self, model, q, v, a, t, h):
         v_cons = v + h * a
-        v = v_cons - h * model.friction_acceleration(self.friction, v, t)
-        lost = model.kinetic_energy(v_cons) - model.kinetic_energy(v)
+        v_new = v_cons - h * model.friction_acceleration(self.friction, v, t)
+        lost = friction_work(model, v, v_cons, v_new)
+        v = v_new
         q = q + h * v
         return q, v, model.acceleration(q, t + h), lost
 
@@ -69,5 +70,5 @@ class SplitLinearFriction(AbstractFixedStep):
     def step(self, model, q, v, a, t, h):
         q1, v_lin = model.linear_flow(q, v, t, h)
         v1 = model.friction_update(self.friction, v_lin, v, h, t + h)
-        lost = model.kinetic_energy(v_lin) - model.kinetic_energy(v1)
+        lost = friction_work(model, v, v_lin, v1)
         return q1, v1, a, lost

@@ -5,7 +5,7 @@ from __future__ import annotations
 import equinox as eqx
 
 from ..friction import AbstractFriction, Coulomb
-from .base import AbstractFixedStep
+from .base import AbstractFixedStep, friction_work
 
 __all__ = ["ProjectedVerlet"]
 
@@ -40,11 +40,11 @@ class ProjectedVerlet(AbstractFixedStep):
         half = 0.5 * h
         v_trial = v + half * a
         v_half = model.friction_update(self.friction, v_trial, v, half, t)
-        lost = model.kinetic_energy(v_trial) - model.kinetic_energy(v_half)
+        lost = friction_work(model, v, v_trial, v_half)
         q = q + h * v_half
         t1 = t + h
         a = model.acceleration(q, t1)
         v_trial = v_half + half * a
         v = model.friction_update(self.friction, v_trial, v_half, half, t1)
-        lost = lost + model.kinetic_energy(v_trial) - model.kinetic_energy(v)
+        lost = lost + friction_work(model, v_half, v_trial, v)
         return q, v, a, lost

@@ -1,0 +1,209 @@
+"""Initial perturbations, as data: each one turns a model into an initial state (q₀, v₀).
+
+All are equinox Modules with array leaves (amplitudes, JAX keys), so a batch of them is a
+`vmap` away. Velocities are lateral speeds [m/s] and displacements lateral [m]: the model
+divides by the clearance R to get θ̇ and θ. Random fields are drawn independently at every
+*sample point* of the model (the field model's nodes; the Galerkin model's quadrature points,
+then projected onto its modes).
+"""
+
+from __future__ import annotations
+
+import abc
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
+
+from .models.base import AbstractModel
+from .models.field import FieldModel
+from .models.galerkin import GalerkinModel
+
+__all__ = [
+    "AbstractPerturbation",
+    "SineVelocity",
+    "RandomVelocity",
+    "RandomForce",
+    "RandomShape",
+    "UserState",
+    "initial_state",
+]
+
+
+def _f(x):
+    if isinstance(x, (int, float)):
+        return jnp.asarray(x, dtype=jnp.result_type(float))
+    return jnp.asarray(x)
+
+
+def _points(model) -> Float[Array, " n"]:
+    if not isinstance(model, (FieldModel, GalerkinModel)):
+        raise TypeError(
+            f"perturbations need a model with sample points (FieldModel, GalerkinModel); got "
+            f"{type(model).__name__}. For SingleMode use jaxrod.perturbations.project_to_mode."
+        )
+    return model.sample_points()
+
+
+def _to_coords(model, theta_at_points):
+    if isinstance(model, GalerkinModel):
+        return model.project(theta_at_points)
+    return theta_at_points
+
+
+class AbstractPerturbation(eqx.Module):
+    """Maps a model to its initial state (θ₀, θ̇₀) in the model's coordinates."""
+
+    @abc.abstractmethod
+    def fields(self, model: AbstractModel) -> tuple[Float[Array, " n"], Float[Array, " n"]]:
+        """Lateral displacement [m] and velocity [m/s] at the model's sample points."""
+
+    def initial_state(self, model: AbstractModel, integrator=None):
+        """(q₀, v₀) in the model's coordinates."""
+        y, v = self.fields(model)
+        R = model.rod.R
+        return _to_coords(model, y / R), _to_coords(model, v / R)
+
+
+class SineVelocity(AbstractPerturbation):
+    """Lateral velocity v(s) = `v0`·sin(`mode`·πs/L) [m/s] on a straight rod.
+
+    `v0` [m/s] and `mode` (≥ 1) are dynamic leaves.
+    """
+
+    v0: Float[Array, ""] = eqx.field(converter=_f)
+    mode: Float[Array, ""] = eqx.field(converter=_f, default=6.0)
+
+    def fields(self, model):
+        s = _points(model)
+        v = self.v0 * jnp.sin(self.mode * jnp.pi * s / model.rod.L)
+        return jnp.zeros_like(s), v
+
+
+class RandomVelocity(AbstractPerturbation):
+    """A lateral velocity drawn uniformly in [−`amplitude`, `amplitude`] [m/s] at every
+    sample point, independently, from `key`; the rod straight."""
+
+    amplitude: Float[Array, ""] = eqx.field(converter=_f)
+    key: PRNGKeyArray
+
+    def fields(self, model):
+        s = _points(model)
+        v = jax.random.uniform(self.key, s.shape, s.dtype, -1.0, 1.0) * self.amplitude
+        return jnp.zeros_like(s), v
+
+
+class RandomShape(AbstractPerturbation):
+    """A lateral displacement drawn uniformly in [−`amplitude`, `amplitude`] [m] at every
+    sample point from `key`, released from rest."""
+
+    amplitude: Float[Array, ""] = eqx.field(converter=_f)
+    key: PRNGKeyArray
+
+    def fields(self, model):
+        s = _points(model)
+        y = jax.random.uniform(self.key, s.shape, s.dtype, -1.0, 1.0) * self.amplitude
+        return y, jnp.zeros_like(s)
+
+
+class RandomForce(AbstractPerturbation):
+    """The reference paper's random position perturbation: lateral forces per unit length
+    drawn uniformly in [−`amplitude`, `amplitude`] [N/m] at every sample point act on the
+    loaded, straight rod (friction included) for `duration` [s] (default 1 ms); the rod is
+    then released from rest in the shape they produced.
+
+    The forcing phase is integrated with the run's fixed-step integrator (required).
+    """
+
+    amplitude: Float[Array, ""] = eqx.field(converter=_f)
+    key: PRNGKeyArray
+    duration: Float[Array, ""] = eqx.field(converter=_f, default=1e-3)
+
+    def fields(self, model):
+        s = _points(model)
+        force = jax.random.uniform(self.key, s.shape, s.dtype, -1.0, 1.0) * self.amplitude
+        return force, jnp.zeros_like(s)
+
+    def initial_state(self, model, integrator=None):
+        from .integrators.base import AbstractFixedStep
+
+        if not isinstance(integrator, AbstractFixedStep):
+            raise TypeError(
+                "RandomForce needs the run's fixed-step integrator (e.g. ProjectedVerlet) to "
+                f"integrate its forcing phase; got {type(integrator).__name__}."
+            )
+        force, _ = self.fields(model)
+        extra = _to_coords(model, force / (model.rod.rho * model.rod.R))
+        forced = _Forced(model, extra)
+        q = jnp.zeros_like(extra)
+        v = jnp.zeros_like(extra)
+        a = forced.acceleration(q, 0.0)
+        h = jnp.asarray(integrator.dt, q.dtype)
+        n = jnp.ceil(self.duration / h).astype(jnp.int32)
+        h = self.duration / jnp.maximum(n, 1)
+
+        def body(i, c):
+            q, v, a = c
+            q, v, a, _ = integrator.step(forced, q, v, a, i * h, h)
+            return q, v, a
+
+        q, v, a = jax.lax.fori_loop(0, n, body, (q, v, a))
+        return q, jnp.zeros_like(v)
+
+
+class UserState(AbstractPerturbation):
+    """Any initial state given directly in the model's coordinates: `q0` [rad] and `v0`
+    [rad/s] (θ, θ̇ at the nodes of a field model; modal amplitudes of a Galerkin model)."""
+
+    q0: Float[Array, " n"] = eqx.field(converter=_f)
+    v0: Float[Array, " n"] = eqx.field(converter=_f)
+
+    def fields(self, model):
+        return self.q0 * model.rod.R, self.v0 * model.rod.R
+
+    def initial_state(self, model, integrator=None):
+        return self.q0, self.v0
+
+
+class _Forced(AbstractModel):
+    """A model with a constant extra acceleration (the forcing phase of `RandomForce`)."""
+
+    inner: AbstractModel
+    extra: Float[Array, " n"]
+
+    def acceleration(self, q, t):
+        return self.inner.acceleration(q, t) + self.extra
+
+    def friction_bounds(self, t):
+        return self.inner.friction_bounds(t)
+
+    def friction_update(self, friction, v_trial, v_prev, h, t):
+        return self.inner.friction_update(friction, v_trial, v_prev, h, t)
+
+    def friction_acceleration(self, friction, v, t):
+        return self.inner.friction_acceleration(friction, v, t)
+
+    def energy_terms(self, q, v, t):
+        return self.inner.energy_terms(q, v, t)
+
+    def kinetic_energy(self, v):
+        return self.inner.kinetic_energy(v)
+
+    def max_frequency(self):
+        return self.inner.max_frequency()
+
+
+def project_to_mode(
+    theta: Float[Array, " n"], mode: ArrayLike
+) -> Float[Array, ""]:
+    """Amplitude of sine mode `mode` in a field θ given at n equally spaced interior nodes
+    (used to start the single-mode model from a field perturbation)."""
+    n = theta.shape[-1]
+    j = jnp.arange(1, n + 1, dtype=theta.dtype)
+    return (2.0 / (n + 1)) * jnp.sum(theta * jnp.sin(jnp.pi * j * _f(mode) / (n + 1)))
+
+
+def initial_state(perturbation: AbstractPerturbation, model, integrator=None):
+    """`perturbation.initial_state(model, integrator)`: (q₀, v₀) in the model's coordinates."""
+    return perturbation.initial_state(model, integrator)

@@ -1,0 +1,181 @@
+"""Scenes: the loaded rod, one model of it and one perturbation, from a few plain settings.
+
+This is the layer the CLI and the sweeps use. ΔF is always measured from the frictionless load
+of the rod's critical mode F⁰_m* (P5; 1.308 N for the reference rod), whatever the model.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from . import theory
+from .integrators import ProjectedVerlet
+from .integrators.base import RunOptions
+from .models import FieldModel, GalerkinModel, SingleMode
+from .params import RodChannel
+from .perturbations import (
+    AbstractPerturbation,
+    RandomForce,
+    RandomShape,
+    RandomVelocity,
+    SineVelocity,
+    project_to_mode,
+)
+from .simulate import simulate
+
+__all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1"]
+
+MODELS = ("mode", "galerkin", "field")
+PERTURBATIONS = ("sine", "random-velocity", "random-position", "random-shape")
+DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence)
+DEFAULT_MODES = 32
+DEFAULT_T1 = 2.0  # s, as the reference paper
+DT_FRACTION = 0.4  # of the explicit step limit
+SINGLE_MODE_DT = 1e-4  # s
+
+
+def _f(x):
+    if isinstance(x, (int, float)):
+        return jnp.asarray(x, dtype=jnp.result_type(float))
+    return jnp.asarray(x)
+
+
+def make_perturbation(kind: str, amplitude, mode: int = 6, key=None, duration=1e-3):
+    """A perturbation of `kind`:
+
+    - `"sine"`: lateral velocity `amplitude`·sin(`mode`·πs/L) [m/s];
+    - `"random-velocity"`: uniform in ±`amplitude` [m/s] at every point;
+    - `"random-position"`: random forces ±`amplitude` [N/m] for `duration` [s], then released
+      from rest (the reference paper's position perturbation);
+    - `"random-shape"`: random lateral displacement ±`amplitude` [m], from rest.
+    """
+    if kind not in PERTURBATIONS:
+        raise ValueError(f"perturbation = {kind!r} is invalid: expected one of {PERTURBATIONS}.")
+    if kind == "sine":
+        return SineVelocity(amplitude, float(mode))
+    key = jax.random.key(0) if key is None else key
+    if kind == "random-velocity":
+        return RandomVelocity(amplitude, key)
+    if kind == "random-position":
+        return RandomForce(amplitude, key, duration)
+    return RandomShape(amplitude, key)
+
+
+class Scene(eqx.Module):
+    """A rod loaded to F = F⁰_m* + `dF`, one model of it, and one perturbation.
+
+    **Arguments:**
+
+    - `rod`: the [`jaxrod.RodChannel`][].
+    - `dF`: load above the critical mode's frictionless load [N] (dynamic).
+    - `perturbation`: any perturbation (dynamic leaves: amplitude, key, ...).
+    - `kind`: `"mode"`, `"galerkin"` or `"field"` (static).
+    - `n`: nodes (field, default 128) or modes (Galerkin, default 32) (static).
+    - `mode`: the single-mode model's mode (static, default 6).
+    - `dt`: fixed step [s] (static; default 0.4 of the step limit at ΔF = 0 for field and
+      Galerkin, 1e-4 s for one mode).
+    - `n_grid`: nodes of the field grid on which random perturbations are drawn before being
+      projected onto the single mode (static).
+    """
+
+    rod: RodChannel
+    dF: Float[Array, ""] = eqx.field(converter=_f)
+    perturbation: AbstractPerturbation = SineVelocity(0.01, 6.0)
+    kind: str = eqx.field(static=True, default="field")
+    n: int | None = eqx.field(static=True, default=None)
+    mode: int = eqx.field(static=True, default=6)
+    dt: float | None = eqx.field(static=True, default=None)
+    n_grid: int = eqx.field(static=True, default=128)
+
+    def __check_init__(self):
+        if self.kind not in MODELS:
+            raise ValueError(f"model = {self.kind!r} is invalid: expected one of {MODELS}.")
+        if not (isinstance(self.mode, int) and self.mode >= 1):
+            raise ValueError(f"mode = {self.mode!r} is invalid: expected an int >= 1.")
+        if self.n is not None and not (isinstance(self.n, int) and self.n >= (1 if self.kind == "galerkin" else 4)):
+            raise ValueError(f"n = {self.n!r} is invalid for the {self.kind} model.")
+        if self.dt is not None and not (isinstance(self.dt, (int, float)) and self.dt > 0):
+            raise ValueError(f"dt = {self.dt!r} is invalid: expected a float > 0 [s].")
+
+    @property
+    def F(self) -> Float[Array, ""]:
+        """The axial load [N]."""
+        return theory.frictionless_load(self.rod, theory.critical_mode(self.rod)) + self.dF
+
+    def model(self):
+        if self.kind == "mode":
+            return SingleMode.from_rod(self.rod, self.mode, F=self.F)
+        if self.kind == "galerkin":
+            return GalerkinModel.from_rod(self.rod, self.n or DEFAULT_MODES, F=self.F)
+        return FieldModel.from_rod(self.rod, self.n or DEFAULT_NODES, F=self.F)
+
+    def _grid_model(self):
+        return FieldModel.from_rod(self.rod, self.n_grid, F=self.F)
+
+    def step(self) -> float:
+        """The fixed step [s] (static: computed from the rod's concrete values at ΔF = 0)."""
+        if self.dt is not None:
+            return float(self.dt)
+        if self.kind == "mode":
+            return SINGLE_MODE_DT
+        unloaded = eqx.tree_at(lambda s: s.dF, self, jnp.zeros(()))
+        return DT_FRACTION * 2.0 / self._static_omega(unloaded.model())
+
+    def integrator(self) -> ProjectedVerlet:
+        return ProjectedVerlet(self.step())
+
+    def initial_state(self):
+        """(q₀, v₀) in the model's coordinates."""
+        model = self.model()
+        if self.kind != "mode":
+            return self.perturbation.initial_state(model, self.integrator())
+        if isinstance(self.perturbation, SineVelocity):
+            # a sine velocity field projects exactly onto its own mode
+            v = jnp.where(self.perturbation.mode == self.mode, self.perturbation.v0 / self.rod.R, 0.0)
+            return jnp.zeros_like(v), v
+        grid = self._grid_model()
+        step = DT_FRACTION * 2.0 / self._static_omega(grid)
+        q, v = self.perturbation.initial_state(grid, ProjectedVerlet(step))
+        return project_to_mode(q, self.mode), project_to_mode(v, self.mode)
+
+    def _static_omega(self, model) -> float:
+        try:
+            with jax.ensure_compile_time_eval():
+                return float(jnp.max(model.max_frequency()))
+        except jax.errors.ConcretizationTypeError:
+            raise ValueError(
+                "Scene.dt must be given explicitly when the rod's stiffness parameters are "
+                "traced (e.g. vmapped over EI, rho or R): the step is a static setting."
+            ) from None
+
+    def run(self, t1: float = DEFAULT_T1, n_save: int = 201, save_state: bool = True, throw: bool = False):
+        """Simulate the scene to `t1` [s]; returns a [`jaxrod.Solution`][]."""
+        q0, v0 = self.initial_state()
+        return simulate(
+            self.model(), self.integrator(), q0, v0, t1, n_save=n_save,
+            options=RunOptions(save_state=save_state), throw=throw,
+        )
+
+    def field_of(self, q):
+        """θ on a grid of nodes for plots: (s [m], θ [rad]) from the model's coordinates."""
+        model = self.model()
+        if self.kind == "field":
+            return model.sample_points(), q
+        if self.kind == "galerkin":
+            return model.sample_points(), jax.vmap(model.field)(q) if q.ndim == 2 else model.field(q)
+        s = jnp.linspace(0.0, self.rod.L, 129)
+        shape = jnp.sin(self.mode * jnp.pi * s / self.rod.L)
+        return s, q[..., None] * shape if jnp.ndim(q) else q * shape
+
+    def dominant_mode(self, q):
+        """The dominant sine mode of the state `q` (the model's own mode for one mode)."""
+        from .modal import dominant_mode
+
+        if self.kind == "field":
+            return dominant_mode(q)
+        if self.kind == "galerkin":
+            return jnp.argmax(jnp.abs(q), axis=-1) + 1
+        return jnp.asarray(self.mode)
