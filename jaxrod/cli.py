@@ -144,6 +144,84 @@ def _cmd_figure(args) -> int:
     return 0
 
 
+def _positive_int(text: str) -> int:
+    try:
+        x = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid integer: {text!r}") from None
+    if x < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
+    return x
+
+
+def _cmd_simulate(args) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    import jax.numpy as jnp
+    import numpy as np
+
+    from .scene import Scene, make_perturbation
+
+    if args.mu < 0:
+        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
+    if args.amplitude < 0:
+        _fail(f"argument --amplitude: {args.amplitude!r} is invalid: expected >= 0.")
+    if args.t1 <= 0:
+        _fail(f"argument --t1: {args.t1!r} is invalid: expected > 0 s.")
+    if args.dt is not None and args.dt <= 0:
+        _fail(f"argument --dt: {args.dt!r} is invalid: expected > 0 s.")
+    if args.model == "field" and args.n is not None and args.n < 4:
+        _fail(f"argument --n: {args.n!r} is invalid: the field model needs >= 4 nodes.")
+    rod = _rod_from_args(args, args.mu)
+    pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
+    scene = Scene(rod, args.dF, pert, args.model, args.n, args.mode, args.dt)
+    try:
+        sol = scene.run(t1=args.t1, n_save=args.n_save, save_state=True, throw=False)
+    except ValueError as err:
+        _fail(str(err))
+    from ._results import RESULTS
+
+    out = {
+        "model": args.model,
+        "perturbation": args.perturbation,
+        "amplitude": args.amplitude,
+        "mu": args.mu,
+        "dF": args.dF,
+        "F": float(scene.F),
+        "n": None if args.model == "mode" else (scene.nodes() if args.model == "field" else scene.model().n_modes),
+        "dt": scene.step(),
+        "t1": args.t1,
+        "buckled": bool(sol.buckled),
+        "t_buckle": _json_number(sol.t_buckle),
+        "dominant_mode": int(scene.dominant_mode(sol.q_final)),
+        "max_theta": float(jnp.max(sol.amplitude)),
+        "stuck": bool(sol.stuck[-1]),
+        "t_stop": float(sol.t_stop),
+        "energy_balance_error": float(sol.energy_balance_error()),
+        "result": RESULTS.describe(sol.result),
+    }
+    if args.plot:
+        from .figures.simulation import plot_simulation
+
+        plot_simulation(scene, sol, args.plot)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        verdict = "BUCKLED" if out["buckled"] else ("stuck (stable)" if out["stuck"] else "not buckled")
+        print(f"{args.model} model, F = {out['F']:.4g} N (dF = {args.dF:g} N), mu = {args.mu:g}, "
+              f"{args.perturbation} amplitude {args.amplitude:g}: {verdict}")
+        if out["buckled"]:
+            print(f"  t_buckle = {out['t_buckle']:.4g} s, dominant mode {out['dominant_mode']}")
+        else:
+            print(f"  stopped at t = {out['t_stop']:.4g} s, dominant mode {out['dominant_mode']}")
+        print(f"  max |theta| = {out['max_theta']:.4g} rad, energy balance error "
+              f"{out['energy_balance_error']:.2e}, result: {out['result']}")
+        if args.plot:
+            print(f"  wrote {args.plot}")
+    return 0 if int(sol.result) == 0 else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="jaxrod", description="Dynamics and stability of a rod in a channel with dry friction.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -155,6 +233,26 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--json", action="store_true", help="print one JSON object")
     _add_rod_options(t)
     t.set_defaults(func=_cmd_theory)
+
+    sm = sub.add_parser("simulate", help="simulate one perturbed rod")
+    sm.add_argument("--model", choices=["mode", "galerkin", "field"], default="field")
+    sm.add_argument("--dF", type=_finite_float, default=5.0, help="load above F0_m* [N] (default 5)")
+    sm.add_argument("--mu", type=_finite_float, default=0.3, help="friction coefficient (default 0.3)")
+    sm.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
+                    default="sine")
+    sm.add_argument("--amplitude", type=_finite_float, default=0.02,
+                    help="m/s (sine, random-velocity); N/m force for 1 ms (random-position); "
+                         "m (random-shape); default 0.02")
+    sm.add_argument("--mode", type=_positive_int, default=6, help="sine / single mode number (default 6)")
+    sm.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sm.add_argument("--n", type=_positive_int, default=None, help="nodes (field; default 128, 384 past 32 unstable modes) or modes (galerkin, 32)")
+    sm.add_argument("--dt", type=_finite_float, default=None, help="time step [s] (default: 0.4 of the limit)")
+    sm.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
+    sm.add_argument("--n-save", dest="n_save", type=_positive_int, default=2001, help="saved times (default 2001)")
+    sm.add_argument("--json", action="store_true", help="print one JSON object")
+    sm.add_argument("--plot", default=None, help="write theta(s,t) and the modal spectrum to this PNG")
+    _add_rod_options(sm)
+    sm.set_defaults(func=_cmd_simulate)
 
     fg = sub.add_parser("figure", help="write a figure")
     fg.add_argument("which", choices=["phase"], help="phase: E2 phase portraits")

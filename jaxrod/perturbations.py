@@ -140,15 +140,15 @@ class RandomForce(AbstractPerturbation):
         v = jnp.zeros_like(extra)
         a = forced.acceleration(q, 0.0)
         h = jnp.asarray(integrator.dt, q.dtype)
-        n = jnp.ceil(self.duration / h).astype(jnp.int32)
-        h = self.duration / jnp.maximum(n, 1)
+        n = jnp.maximum(jnp.ceil(self.duration / h), 1.0)
+        h = self.duration / n
 
         def body(i, c):
             q, v, a = c
-            q, v, a, _ = integrator.step(forced, q, v, a, i * h, h)
+            q, v, a, _ = integrator.step(forced, q, v, a, i.astype(h.dtype) * h, h)
             return q, v, a
 
-        q, v, a = jax.lax.fori_loop(0, n, body, (q, v, a))
+        q, v, a = jax.lax.fori_loop(0, n.astype(jnp.int32), body, (q, v, a))
         return q, jnp.zeros_like(v)
 
 

@@ -30,7 +30,7 @@ __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES",
 
 MODELS = ("mode", "galerkin", "field")
 PERTURBATIONS = ("sine", "random-velocity", "random-position", "random-shape")
-DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence)
+DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence) and `default_nodes`
 DEFAULT_MODES = 32
 DEFAULT_T1 = 2.0  # s, as the reference paper
 DT_FRACTION = 0.4  # of the explicit step limit
@@ -41,6 +41,19 @@ def _f(x):
     if isinstance(x, (int, float)):
         return jnp.asarray(x, dtype=jnp.result_type(float))
     return jnp.asarray(x)
+
+
+def default_nodes(rod: RodChannel, F) -> int:
+    """The field model's default node count for the load `F` [N] (concrete), from the
+    convergence study in `benchmarks/field_convergence.py`: the critical sine velocity is within
+    1 % of its converged value with 128 nodes while at most 32 modes are unstable
+    (m_max = (L/π)√(F/EI) ≤ 32, ΔF ≲ 20 N for the reference rod), and needs 384 beyond (measured
+    at ΔF = 60 N: 2.3 % off with 128 nodes, 1.1 % with 256, 0.35 % with 384)."""
+    import math
+
+    with jax.ensure_compile_time_eval():
+        m_max = float(rod.L / math.pi * jnp.sqrt(jnp.maximum(F, 0.0) / rod.EI))
+    return DEFAULT_NODES if m_max <= 32 else 384
 
 
 def make_perturbation(kind: str, amplitude, mode: int = 6, key=None, duration=1e-3):
@@ -73,10 +86,12 @@ class Scene(eqx.Module):
     - `dF`: load above the critical mode's frictionless load [N] (dynamic).
     - `perturbation`: any perturbation (dynamic leaves: amplitude, key, ...).
     - `kind`: `"mode"`, `"galerkin"` or `"field"` (static).
-    - `n`: nodes (field, default 128) or modes (Galerkin, default 32) (static).
+    - `n`: nodes (field; default `default_nodes` of the load: 128, or 384 past 32 unstable
+      modes) or modes (Galerkin, default 32) (static).
     - `mode`: the single-mode model's mode (static, default 6).
     - `dt`: fixed step [s] (static; default 0.4 of the step limit at ΔF = 0 for field and
       Galerkin, 1e-4 s for one mode).
+    - `threshold`: buckling amplitude max|θ| [rad] (static, default 0.5).
     - `n_grid`: nodes of the field grid on which random perturbations are drawn before being
       projected onto the single mode (static).
     """
@@ -89,6 +104,7 @@ class Scene(eqx.Module):
     mode: int = eqx.field(static=True, default=6)
     dt: float | None = eqx.field(static=True, default=None)
     n_grid: int = eqx.field(static=True, default=128)
+    threshold: float = eqx.field(static=True, default=0.5)
 
     def __check_init__(self):
         if self.kind not in MODELS:
@@ -110,7 +126,19 @@ class Scene(eqx.Module):
             return SingleMode.from_rod(self.rod, self.mode, F=self.F)
         if self.kind == "galerkin":
             return GalerkinModel.from_rod(self.rod, self.n or DEFAULT_MODES, F=self.F)
-        return FieldModel.from_rod(self.rod, self.n or DEFAULT_NODES, F=self.F)
+        return FieldModel.from_rod(self.rod, self.nodes(), F=self.F)
+
+    def nodes(self) -> int:
+        """Field nodes: `n`, or `default_nodes` of the (concrete) load."""
+        if self.n is not None:
+            return self.n
+        try:
+            return default_nodes(self.rod, self.F)
+        except jax.errors.ConcretizationTypeError:
+            raise ValueError(
+                "Scene.n must be given explicitly when the load is traced (e.g. vmapped over "
+                "dF): the node count is a static setting."
+            ) from None
 
     def _grid_model(self):
         return FieldModel.from_rod(self.rod, self.n_grid, F=self.F)
@@ -121,8 +149,13 @@ class Scene(eqx.Module):
             return float(self.dt)
         if self.kind == "mode":
             return SINGLE_MODE_DT
+        # the limit at dF = 0 (compression only lowers the highest frequency)
         unloaded = eqx.tree_at(lambda s: s.dF, self, jnp.zeros(()))
-        return DT_FRACTION * 2.0 / self._static_omega(unloaded.model())
+        if self.kind == "field":
+            model = FieldModel.from_rod(self.rod, self.nodes(), F=unloaded.F)
+        else:
+            model = unloaded.model()
+        return DT_FRACTION * 2.0 / self._static_omega(model)
 
     def integrator(self) -> ProjectedVerlet:
         return ProjectedVerlet(self.step())
@@ -152,11 +185,13 @@ class Scene(eqx.Module):
             ) from None
 
     def run(self, t1: float = DEFAULT_T1, n_save: int = 201, save_state: bool = True, throw: bool = False):
-        """Simulate the scene to `t1` [s]; returns a [`jaxrod.Solution`][]."""
+        """Simulate the scene to `t1` [s]; returns a [`jaxrod.Solution`][]. The run stops when
+        max|θ| passes `threshold` (buckled) or the rod is stuck."""
         q0, v0 = self.initial_state()
         return simulate(
             self.model(), self.integrator(), q0, v0, t1, n_save=n_save,
-            options=RunOptions(save_state=save_state), throw=throw,
+            options=RunOptions(buckle_threshold=self.threshold, save_state=save_state),
+            throw=throw,
         )
 
     def field_of(self, q):

@@ -86,3 +86,55 @@ def test_phase_figure(tmp_path):
     assert len(lines) == 1 + 6 * 100
     assert len(agreement) == 6
     assert min(agreement.values()) >= 0.95
+
+
+SIM_KEYS = {"buckled", "t_buckle", "dominant_mode", "max_theta", "stuck", "energy_balance_error"}
+
+
+@pytest.mark.parametrize("model", ["mode", "galerkin", "field"])
+def test_simulate_json(capsys, model):
+    base = ["simulate", "--model", model, "--dF", "5", "--mu", "0.3", "--n-save", "51", "--json"]
+    if model == "field":
+        base += ["--n", "48"]
+    if model == "galerkin":
+        base += ["--n", "16"]
+    small = run_json(capsys, *base, "--amplitude", "0.01")
+    assert SIM_KEYS <= set(small)
+    assert small["buckled"] is False and small["stuck"] is True and small["t_buckle"] is None
+    assert small["dominant_mode"] == 6 and small["energy_balance_error"] < 1e-2
+    big = run_json(capsys, *base, "--amplitude", "0.06")
+    assert big["buckled"] is True and big["max_theta"] >= 0.5 and big["t_buckle"] > 0
+
+
+def test_simulate_random_perturbations_and_plot(capsys, tmp_path):
+    png = tmp_path / "sim.png"
+    out = run_json(capsys, "simulate", "--model", "field", "--n", "32", "--perturbation", "random-velocity",
+                   "--amplitude", "0.015", "--seed", "3", "--dF", "10", "--n-save", "101",
+                   "--json", "--plot", str(png))
+    assert SIM_KEYS <= set(out) and png.stat().st_size > 10_000
+    out2 = run_json(capsys, "simulate", "--model", "field", "--n", "32", "--perturbation", "random-velocity",
+                    "--amplitude", "0.015", "--seed", "3", "--dF", "10", "--n-save", "101", "--json")
+    assert out2["max_theta"] == out["max_theta"]  # same seed, same run
+    out3 = run_json(capsys, "simulate", "--model", "galerkin", "--n", "8", "--perturbation", "random-position",
+                    "--amplitude", "5", "--dF", "2", "--n-save", "51", "--json")
+    assert SIM_KEYS <= set(out3)
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["simulate", "--mu", "-1"], "--mu"),
+        (["simulate", "--model", "rod"], "--model"),
+        (["simulate", "--amplitude", "-0.1"], "--amplitude"),
+        (["simulate", "--t1", "0"], "--t1"),
+        (["simulate", "--n", "2"], "--n"),
+        (["simulate", "--perturbation", "noise"], "--perturbation"),
+        (["simulate", "--dt", "abc"], "--dt"),
+    ],
+)
+def test_simulate_bad_values(capsys, argv, option):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and option in err
