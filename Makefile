@@ -13,8 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/jaxrod figure phase --out results/demo
-	$(BIN)/jaxrod theory --mu 0.3 --dF 5
+	$(BIN)/jaxrod map --out results/demo
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

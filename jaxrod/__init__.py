@@ -19,6 +19,10 @@ from .integrators import SymplecticEuler as SymplecticEuler
 from . import modal as modal
 from . import perturbations as perturbations
 from . import search as search
+from .sweeps import SweepResult as SweepResult
+from .sweeps import SweepSpec as SweepSpec
+from .sweeps import sweep as sweep
+from .sweeps import wilson_interval as wilson_interval
 from .perturbations import RandomForce as RandomForce
 from .perturbations import RandomShape as RandomShape
 from .perturbations import RandomVelocity as RandomVelocity

@@ -222,6 +222,62 @@ def _cmd_simulate(args) -> int:
     return 0 if int(sol.result) == 0 else 1
 
 
+def _range_spec(text: str):
+    """LO:HI:N -> N log-spaced values from LO to HI (linear if LO <= 0)."""
+    import numpy as np
+
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(f"{text!r} is not of the form LO:HI:N")
+    try:
+        lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not of the form LO:HI:N (numbers)") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)) or n < 1 or (n > 1 and hi <= lo):
+        raise argparse.ArgumentTypeError(f"{text!r}: need finite LO < HI and N >= 1")
+    if n == 1:
+        return np.array([lo])
+    return np.geomspace(lo, hi, n) if lo > 0 else np.linspace(lo, hi, n)
+
+
+def _cmd_map(args) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    import numpy as np
+
+    from .stability_map import stability_map
+
+    if args.mu is not None and args.mu < 0:
+        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
+    if np.any(args.v0 <= 0):
+        _fail(f"argument --v0: velocities must be > 0 m/s, got {args.v0.min()!r}.")
+    mus = (0.3, 0.0) if args.mu is None else (args.mu,)
+    print(f"stability map: {args.model} model, mu = {', '.join(f'{m:g}' for m in mus)}, "
+          f"{len(args.dF)} x {len(args.v0)} grid, {jax.local_device_count()} device(s) "
+          f"({jax.devices()[0].platform})")
+    try:
+        s = stability_map(mus, args.dF, args.v0, args.model, args.n, 6, args.out,
+                          progress=not args.quiet, t1=args.t1)
+    except ValueError as err:
+        _fail(str(err))
+    print(f"n = {s['n']}, dt = {s['dt']:.3e} s; wrote {args.out}/map.png, map.csv, map.json")
+    for key, m in s["maps"].items():
+        line = f"  mu = {key}: {m['buckled']} buckled, {m['stable']} stable"
+        if m["failed"]:
+            line += f", {m['failed']} failed"
+        print(line)
+        if m["mu"] > 0:
+            if math.isfinite(m["exponent"]):
+                print(f"    boundary v0 ~ dF^p with p = {m['exponent']:.3f} +/- {m['exponent_stderr']:.3f} "
+                      f"(theory -1/2), from {len(m['boundary_dF'])} columns")
+            else:
+                print("    no boundary crossing inside the grid: widen --v0 or --dF")
+        largest = m["largest_stable_dF_over_F0cr"]
+        print("    largest stable dF/F0cr seen: " + (f"{largest:.2f}" if largest is not None else "none (buckles everywhere)"))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="jaxrod", description="Dynamics and stability of a rod in a channel with dry friction.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -254,6 +310,18 @@ def build_parser() -> argparse.ArgumentParser:
     _add_rod_options(sm)
     sm.set_defaults(func=_cmd_simulate)
 
+    mp = sub.add_parser("map", help="E3 stability map over (dF, v0): the main job")
+    mp.add_argument("--mu", type=_finite_float, default=None,
+                    help="friction coefficient (default: 0.3 and, in the same figure, 0)")
+    mp.add_argument("--dF", type=_range_spec, default="0.5:64:20", help="LO:HI:N loads above F0_6 [N] (log-spaced)")
+    mp.add_argument("--v0", type=_range_spec, default="0.001:0.2:24", help="LO:HI:N sine amplitudes [m/s] (log-spaced)")
+    mp.add_argument("--model", choices=["mode", "galerkin", "field"], default="field")
+    mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
+    mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
+    mp.add_argument("--out", default="results/map", help="output folder (default results/map)")
+    mp.add_argument("--quiet", action="store_true", help="no progress bar")
+    mp.set_defaults(func=_cmd_map)
+
     fg = sub.add_parser("figure", help="write a figure")
     fg.add_argument("which", choices=["phase"], help="phase: E2 phase portraits")
     fg.add_argument("--out", default="results", help="output folder (default: results)")
@@ -261,8 +329,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _use_all_cpu_cores() -> None:
+    """On a CPU-only machine, expose one XLA device per core so that sweeps shard their batch
+    over every core (set before JAX starts its backend; an explicit XLA_FLAGS wins)."""
+    import os
+
+    flags = os.environ.get("XLA_FLAGS", "")
+    if "xla_force_host_platform_device_count" not in flags:
+        n = os.cpu_count() or 1
+        os.environ["XLA_FLAGS"] = (flags + f" --xla_force_host_platform_device_count={n}").strip()
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if args.command == "map":
+        _use_all_cpu_cores()
     return args.func(args)
 
 

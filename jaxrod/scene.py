@@ -92,19 +92,21 @@ class Scene(eqx.Module):
     - `dt`: fixed step [s] (static; default 0.4 of the step limit at ΔF = 0 for field and
       Galerkin, 1e-4 s for one mode).
     - `threshold`: buckling amplitude max|θ| [rad] (static, default 0.5).
+    - `grid_dt`: step of that grid's forcing phase (static; default 0.4 of its limit).
     - `n_grid`: nodes of the field grid on which random perturbations are drawn before being
       projected onto the single mode (static).
     """
 
     rod: RodChannel
     dF: Float[Array, ""] = eqx.field(converter=_f)
-    perturbation: AbstractPerturbation = SineVelocity(0.01, 6.0)
+    perturbation: AbstractPerturbation = eqx.field(default_factory=lambda: SineVelocity(0.01, 6.0))
     kind: str = eqx.field(static=True, default="field")
     n: int | None = eqx.field(static=True, default=None)
     mode: int = eqx.field(static=True, default=6)
     dt: float | None = eqx.field(static=True, default=None)
     n_grid: int = eqx.field(static=True, default=128)
     threshold: float = eqx.field(static=True, default=0.5)
+    grid_dt: float | None = eqx.field(static=True, default=None)
 
     def __check_init__(self):
         if self.kind not in MODELS:
@@ -170,7 +172,7 @@ class Scene(eqx.Module):
             v = jnp.where(self.perturbation.mode == self.mode, self.perturbation.v0 / self.rod.R, 0.0)
             return jnp.zeros_like(v), v
         grid = self._grid_model()
-        step = DT_FRACTION * 2.0 / self._static_omega(grid)
+        step = self.grid_dt or DT_FRACTION * 2.0 / self._static_omega(grid)
         q, v = self.perturbation.initial_state(grid, ProjectedVerlet(step))
         return project_to_mode(q, self.mode), project_to_mode(v, self.mode)
 

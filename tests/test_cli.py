@@ -138,3 +138,29 @@ def test_simulate_bad_values(capsys, argv, option):
     assert exc.value.code != 0
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and option in err
+
+
+def test_map_main_job(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")  # leave env as found
+    out = tmp_path / "map"
+    assert main(["map", "--dF", "1:40:4", "--v0", "0.002:0.15:6", "--n", "32", "--t1", "0.5",
+                 "--out", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "boundary v0 ~ dF^p" in text and "largest stable dF/F0cr seen" in text
+    for f in ("map.png", "map.csv", "map.json", "sweep_mu0.3/sweep.json", "sweep_mu0/sweep.json"):
+        assert (out / f).exists(), f
+    s = json.loads((out / "map.json").read_text())
+    fric, free = s["maps"]["0.3"], s["maps"]["0"]
+    assert free["buckles_for_every_dF_gt_0"] is True and free["stable"] == 0
+    assert fric["stable"] > 0 and fric["buckled"] > 0
+    v_b = fric["boundary_v0"]
+    assert len(v_b) >= 3 and all(b <= a for a, b in zip(v_b, v_b[1:]))  # boundary falls with dF
+    assert -1.0 < fric["exponent"] < -0.3
+    rows = (out / "map.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * 24
+
+
+def test_map_bad_range(capsys):
+    with pytest.raises(SystemExit):
+        main(["map", "--dF", "5:1:3"])
+    assert "--dF" in capsys.readouterr().err

@@ -29,7 +29,7 @@ class DiffraxSmooth(AbstractIntegrator):
     - `dt0`: initial step [s]; `max_steps`: cap on steps (result `max_steps` if reached).
     """
 
-    friction: AbstractFriction = Tanh(1e-3)
+    friction: AbstractFriction = eqx.field(default_factory=lambda: Tanh(1e-3))
     solver: diffrax.AbstractSolver = diffrax.Tsit5()
     rtol: float = eqx.field(static=True, default=1e-8)
     atol: float = eqx.field(static=True, default=1e-10)

@@ -1,0 +1,196 @@
+"""E3: the stability map — straight or buckled over a grid of (ΔF, v₀) — and its boundary."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+
+from . import theory
+from .params import RodChannel
+from .sweeps import SweepResult, SweepSpec, sweep
+
+__all__ = ["stability_map", "grid_boundary", "fit_power_law", "plot_maps"]
+
+
+def grid_boundary(dF: np.ndarray, v0: np.ndarray, buckled: np.ndarray, ok: np.ndarray):
+    """The boundary v₀(ΔF) read off a map: per ΔF, the geometric mean of the largest stable
+    and the smallest buckled v₀, where the column is monotone (stable below, buckled above)
+    and has both. `buckled`, `ok` of shape (len(dF), len(v0)).
+
+    **Returns:** `(dF_b, v_b, lo, hi)` for the columns with a boundary.
+    """
+    out = []
+    for i, f in enumerate(dF):
+        b, good = buckled[i], ok[i]
+        if not good.all() or b.all() or not b.any():
+            continue
+        first = int(np.argmax(b))
+        if not b[first:].all():  # not monotone: no single boundary
+            continue
+        lo, hi = v0[first - 1], v0[first]
+        out.append((f, math.sqrt(lo * hi), lo, hi))
+    if not out:
+        return (np.array([]),) * 4
+    return tuple(np.array(c) for c in zip(*out))
+
+
+def fit_power_law(x: np.ndarray, y: np.ndarray):
+    """Least-squares fit of log y = log c + p log x.
+
+    **Returns:** `(p, p_stderr, c)`; the standard error is `nan` with fewer than 3 points.
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if len(x) < 2:
+        return math.nan, math.nan, math.nan
+    X = np.c_[np.ones_like(x), np.log(x)]
+    coef, res, *_ = np.linalg.lstsq(X, np.log(y), rcond=None)
+    if len(x) > 2:
+        resid = np.log(y) - X @ coef
+        s2 = resid @ resid / (len(x) - 2)
+        cov = s2 * np.linalg.inv(X.T @ X)
+        se = math.sqrt(cov[1, 1])
+    else:
+        se = math.nan
+    return float(coef[1]), se, float(math.exp(coef[0]))
+
+
+def theory_boundary(rod: RodChannel, dF: np.ndarray, mode: int = 6) -> np.ndarray:
+    """Single-mode theory (P6): v_cr = R f/√|k_m| [m/s] at F = F⁰_m* + ΔF."""
+    import jax.numpy as jnp
+
+    F0 = theory.frictionless_load(rod, theory.critical_mode(rod))
+    k = theory.stiffness(rod, mode, F0 + jnp.asarray(dF))
+    return np.asarray(rod.R * theory.velocity_intercept(k, theory.friction_amplitude(rod)))
+
+
+def stability_map(
+    mus=(0.3, 0.0),
+    dF=np.geomspace(0.5, 64.0, 16),
+    v0=np.geomspace(1e-3, 0.2, 16),
+    model: str = "field",
+    n: int | None = None,
+    mode: int = 6,
+    out: str | None = "results/map",
+    progress: bool = True,
+    t1: float = 2.0,
+) -> dict:
+    """Classify the reference rod straight/buckled over the grid `dF` × `v0` for every μ in
+    `mus` (sine mode-`mode` velocity perturbation), fit the boundary, and write `map.png`,
+    `map.csv`, `map.json` and one resumable sweep folder per μ under `out`.
+
+    **Returns:** the summary (per μ: boundary points, fitted exponent ± standard error, the
+    largest stable ΔF/F⁰_cr seen, counts), also written to `map.json`.
+    """
+    dF = np.asarray(dF, float)
+    v0 = np.asarray(v0, float)
+    results = {}
+    summary = {"model": model, "mode": mode, "t1": t1, "dF": dF.tolist(), "v0": v0.tolist(), "maps": {}}
+    for mu in mus:
+        spec = SweepSpec(model=model, perturbation="sine", mu=float(mu), mode=mode, n=n, t1=t1)
+        path = None if out is None else os.path.join(out, f"sweep_mu{mu:g}")
+        res = sweep(spec, {"dF": dF, "amplitude": v0}, path=path, progress=progress)
+        results[mu] = res
+        summary["maps"][f"{mu:g}"] = _summarise(res, dF, v0, float(mu))
+    summary["n"] = results[mus[0]].meta["n"]
+    summary["dt"] = results[mus[0]].meta["dt"]
+    if out is not None:
+        os.makedirs(out, exist_ok=True)
+        _write_csv(os.path.join(out, "map.csv"), results)
+        with open(os.path.join(out, "map.json"), "w") as fh:
+            json.dump(summary, fh, indent=1)
+        plot_maps(results, summary, os.path.join(out, "map.png"))
+    return summary
+
+
+def _summarise(res: SweepResult, dF, v0, mu) -> dict:
+    rod = RodChannel.reference(mu=mu)
+    F0cr = float(theory.critical_load_continuous(rod))
+    b = res.grid("buckled")
+    ok = res.grid("result") == 0
+    dF_b, v_b, lo, hi = grid_boundary(dF, v0, b, ok)
+    p, se, c = fit_power_law(dF_b, v_b) if len(dF_b) >= 2 else (math.nan, math.nan, math.nan)
+    stable = (~b) & ok
+    cols_stable = stable.any(axis=1)
+    largest = float(dF[cols_stable].max() / F0cr) if cols_stable.any() else None
+    buckles_every_positive = bool(b[dF > 0].all(axis=None)) if (dF > 0).any() else None
+    return {
+        "mu": mu,
+        "members": len(res),
+        "buckled": int((b & ok).sum()),
+        "stable": int(stable.sum()),
+        "failed": int((~ok).sum()),
+        "boundary_dF": dF_b.tolist(),
+        "boundary_v0": v_b.tolist(),
+        "boundary_v0_lo": np.asarray(lo).tolist(),
+        "boundary_v0_hi": np.asarray(hi).tolist(),
+        "exponent": p,
+        "exponent_stderr": se,
+        "prefactor": c,
+        "largest_stable_dF_over_F0cr": largest,
+        "buckles_for_every_dF_gt_0": buckles_every_positive,
+        "F0cr_continuous": F0cr,
+    }
+
+
+def _write_csv(path, results: dict) -> None:
+    with open(path, "w") as fh:
+        fh.write("mu,dF,v0,buckled,t_buckle,dominant_mode,max_theta,stuck,t_stop,result\n")
+        for mu, res in results.items():
+            o, i = res.outputs, res.inputs
+            for k in range(len(res)):
+                fh.write(
+                    f"{mu:g},{i['dF'][k]!r},{i['amplitude'][k]!r},{int(o['buckled'][k])},"
+                    f"{o['t_buckle'][k]!r},{int(o['dominant_mode'][k])},{o['max_theta'][k]!r},"
+                    f"{int(o['stuck'][k])},{o['t_stop'][k]!r},{int(o['result'][k])}\n"
+                )
+
+
+def plot_maps(results: dict, summary: dict, path: str) -> None:
+    """One panel per μ: stable (circles) / buckled (crosses), P6 theory, fitted boundary."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    mus = list(results)
+    fig, axes = plt.subplots(1, len(mus), figsize=(6.2 * len(mus), 5.0), squeeze=False)
+    dF = np.asarray(summary["dF"])
+    v0 = np.asarray(summary["v0"])
+    fine = np.geomspace(dF.min(), dF.max(), 200)
+    for ax, mu in zip(axes[0], mus):
+        res = results[mu]
+        s = summary["maps"][f"{mu:g}"]
+        b = res.outputs["buckled"]
+        ok = res.outputs["result"] == 0
+        x, y = res.inputs["dF"], 1e3 * res.inputs["amplitude"]
+        ax.scatter(x[~b & ok], y[~b & ok], s=22, facecolors="none", edgecolors="tab:green", label="stable (straight)")
+        ax.scatter(x[b & ok], y[b & ok], s=22, marker="x", c="tab:red", label="buckled")
+        if (~ok).any():
+            ax.scatter(x[~ok], y[~ok], s=22, marker="s", c="k", label="failed run")
+        if mu > 0:
+            th = 1e3 * theory_boundary(RodChannel.reference(mu=mu), fine, summary["mode"])
+            ax.plot(fine, th, "k--", lw=1.2, label="single-mode theory P6 (slope −1/2)")
+            if len(s["boundary_dF"]) >= 2 and np.isfinite(s["exponent"]):
+                fit = s["prefactor"] * fine ** s["exponent"]
+                ax.plot(fine, 1e3 * fit, "-", color="tab:blue", lw=1.5,
+                        label=f"fitted boundary: v0 ∝ ΔF^({s['exponent']:.3f} ± {s['exponent_stderr']:.3f})")
+                ax.plot(s["boundary_dF"], 1e3 * np.asarray(s["boundary_v0"]), "o", color="tab:blue", ms=3)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(dF.min() / 1.15, dF.max() * 1.15)
+        ax.set_ylim(1e3 * v0.min() / 1.2, 1e3 * v0.max() * 1.2)
+        ax.set_xlabel("ΔF = F − F⁰₆ [N]")
+        ax.set_ylabel("v₀ (sine mode-6 lateral speed) [mm/s]")
+        title = f"μ = {mu:g}: {s['buckled']} buckled, {s['stable']} stable"
+        if s["largest_stable_dF_over_F0cr"] is not None:
+            title += f"\nstraight up to ΔF = {s['largest_stable_dF_over_F0cr']:.1f} F⁰cr"
+        ax.set_title(title, fontsize=10)
+        ax.legend(fontsize=8, loc="lower left")
+    fig.suptitle(f"Stability map, reference rod, {summary['model']} model (n = {summary['n']}, "
+                 f"dt = {summary['dt']:.2e} s, horizon {summary['t1']:g} s)", fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)

@@ -1,0 +1,160 @@
+import json
+import logging
+import os
+import subprocess
+import sys
+import textwrap
+
+import jax
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod.sweeps import SweepResult, SweepSpec, sweep
+
+SPEC = SweepSpec(model="field", n=16, perturbation="random-velocity", t1=0.3)
+INPUTS = {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05], "realization": [0, 1, 2]}
+FLOATS = ("t_buckle", "max_theta", "final_theta", "t_stop")
+EXACT = ("buckled", "dominant_mode", "stuck", "result")
+
+
+def same(a: SweepResult, b: SweepResult):
+    for k in EXACT:
+        np.testing.assert_array_equal(a.outputs[k], b.outputs[k], err_msg=k)
+    for k in FLOATS:
+        np.testing.assert_allclose(a.outputs[k], b.outputs[k], rtol=1e-10, atol=0, err_msg=k)
+
+
+def run_script(code: str, env_extra=None):
+    env = dict(os.environ, **(env_extra or {}))
+    res = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
+                         text=True, env=env, timeout=600)
+    return res
+
+
+PRELUDE = """
+import jax; jax.config.update("jax_enable_x64", True)
+import numpy as np, sys, os
+from jaxrod.sweeps import SweepSpec, sweep
+SPEC = SweepSpec(model="field", n=16, perturbation="random-velocity", t1=0.3)
+INPUTS = {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05], "realization": [0, 1, 2]}
+"""
+
+
+def test_results_do_not_depend_on_chunk_size_or_device_count(tmp_path):
+    ref = sweep(SPEC, INPUTS, seed=3, chunk_size=5, progress=False)
+    assert ref.outputs["buckled"].any() and not ref.outputs["buckled"].all()
+    out = tmp_path / "four.npz"
+    code = PRELUDE + f"""
+assert jax.local_device_count() == 4, jax.local_device_count()
+a = sweep(SPEC, INPUTS, seed=3, chunk_size=3, progress=False)   # rounded up to 4
+b = sweep(SPEC, INPUTS, seed=3, chunk_size=8, progress=False)
+np.savez("{out}", **{{"a_" + k: v for k, v in a.outputs.items()}}, **{{"b_" + k: v for k, v in b.outputs.items()}})
+"""
+    res = run_script(code, {"XLA_FLAGS": "--xla_force_host_platform_device_count=4"})
+    assert res.returncode == 0, res.stderr[-3000:]
+    z = np.load(out)
+    for tag in ("a_", "b_"):
+        other = SweepResult(ref.inputs, {k: z[tag + k] for k in ref.outputs}, ref.shape, ref.names, ref.meta)
+        same(ref, other)
+
+
+def test_random_keys_differ_per_member_and_follow_the_seed():
+    a = sweep(SPEC, {"dF": 20.0, "amplitude": 0.05, "realization": np.arange(6)}, seed=1, progress=False)
+    b = sweep(SPEC, {"dF": 20.0, "amplitude": 0.05, "realization": np.arange(6)}, seed=2, progress=False)
+    assert len(np.unique(a.outputs["max_theta"])) == 6
+    assert not np.array_equal(a.outputs["max_theta"], b.outputs["max_theta"])
+
+
+def test_resume_after_interruption(tmp_path):
+    path = tmp_path / "run"
+    code = PRELUDE + f"""
+def stop(c):
+    if c == 0:
+        os._exit(3)   # killed right after its first chunk was written
+sweep(SPEC, INPUTS, seed=3, chunk_size=4, path="{path}", progress=False, on_chunk=stop)
+"""
+    res = run_script(code)
+    assert res.returncode == 3, res.stderr[-3000:]
+    assert sorted(os.listdir(path)) == ["chunk_00000.npz", "sweep.json"]
+    mtime = os.path.getmtime(path / "chunk_00000.npz")
+    computed = []
+    resumed = sweep(SPEC, INPUTS, seed=3, chunk_size=4, path=str(path), progress=False,
+                    on_chunk=computed.append)
+    assert computed == [1, 2]  # chunk 0 not recomputed
+    assert os.path.getmtime(path / "chunk_00000.npz") == mtime
+    full = sweep(SPEC, INPUTS, seed=3, chunk_size=4, progress=False)
+    same(full, resumed)
+    loaded = SweepResult.load(str(path))
+    same(full, loaded)
+    assert loaded.shape == (2, 2, 3) and loaded.names == ("dF", "amplitude", "realization")
+    np.testing.assert_array_equal(loaded.inputs["dF"], full.inputs["dF"])
+
+
+def test_mismatched_resume_is_refused_and_metadata_round_trips(tmp_path):
+    path = str(tmp_path / "run")
+    res = sweep(SPEC, INPUTS, seed=3, path=path, progress=False)
+    meta = json.load(open(os.path.join(path, "sweep.json")))
+    assert meta["spec"] == SPEC.to_json() and meta["seed"] == 3
+    assert meta["jax"] == jax.__version__ and meta["dtype"] == "float64"
+    assert meta["jaxrod"] == jr.__version__ and meta["n"] == 16 and meta["dt"] > 0
+    with pytest.raises(ValueError, match="different sweep"):
+        sweep(SPEC, INPUTS, seed=4, path=path, progress=False)
+    with pytest.raises(ValueError, match="different sweep"):
+        sweep(SweepSpec(model="field", n=16, perturbation="random-velocity", t1=0.4), INPUTS, seed=3, path=path, progress=False)
+    with pytest.raises(ValueError, match="different sweep"):
+        sweep(SPEC, {**INPUTS, "dF": [2.0, 21.0]}, seed=3, path=path, progress=False)
+    same(res, SweepResult.load(path))
+    csv = tmp_path / "r.csv"
+    res.to_csv(str(csv))
+    lines = csv.read_text().splitlines()
+    assert len(lines) == 1 + 12 and lines[0].startswith("dF,amplitude,realization,index,buckled")
+
+
+def test_bad_member_is_flagged_and_the_rest_complete():
+    spec = SweepSpec(model="field", n=16, perturbation="sine", t1=0.3)
+    mus = [0.3, float("nan"), -0.1, 0.3]
+    res = sweep(spec, {"mu": mus, "dF": [5.0, 5.0, 5.0, 20.0], "amplitude": 0.05}, combine="zip", progress=False)
+    codes = res.outputs["result"].tolist()
+    assert codes == [0, jr.RESULTS.invalid_input, jr.RESULTS.invalid_input, 0]
+    good = sweep(spec, {"mu": [0.3, 0.3], "dF": [5.0, 20.0], "amplitude": 0.05}, combine="zip", progress=False)
+    for k in EXACT:
+        np.testing.assert_array_equal(res.outputs[k][[0, 3]], good.outputs[k])
+    assert "2 an input value is outside its valid range" in res.summary()
+
+
+def test_configuration_errors_are_caught_before_any_work(tmp_path):
+    path = tmp_path / "never"
+    with pytest.raises(ValueError, match="unknown sweep parameter"):
+        sweep(SPEC, {"dF": [1.0], "speed": [1.0]}, path=str(path), progress=False)
+    with pytest.raises(ValueError, match="1-D"):
+        sweep(SPEC, {"dF": [[1.0, 2.0]]}, path=str(path), progress=False)
+    with pytest.raises(ValueError, match="equal lengths"):
+        sweep(SPEC, {"dF": [1.0, 2.0], "amplitude": [1.0, 2.0, 3.0]}, combine="zip", path=str(path), progress=False)
+    with pytest.raises(ValueError, match="combine"):
+        sweep(SPEC, {"dF": [1.0]}, combine="outer", progress=False)
+    with pytest.raises(ValueError, match="SweepSpec.model"):
+        SweepSpec(model="rod")
+    assert not path.exists()
+
+
+def test_sweep_compiles_once(caplog):
+    jax.config.update("jax_log_compiles", True)
+    try:
+        with caplog.at_level(logging.WARNING, logger="jax"):
+            sweep(SPEC, {"dF": [1.0, 3.0, 9.0], "amplitude": 0.01, "realization": [0, 1, 2]}, chunk_size=2,
+                  progress=False)  # 9 members: 5 chunks, the last padded
+    finally:
+        jax.config.update("jax_log_compiles", False)
+    compiles = [r.getMessage() for r in caplog.records if r.getMessage().startswith("Compiling jit(run_chunk)")]
+    assert len(compiles) == 1, compiles
+
+
+def test_ensemble_probability_with_confidence_interval():
+    res = sweep(SPEC, {"dF": [2.0, 40.0], "amplitude": 0.03, "realization": np.arange(8)}, progress=False)
+    prob = res.probability("realization")
+    assert prob["p"].shape == (2, 1)
+    assert np.all((prob["lo"] <= prob["p"]) & (prob["p"] <= prob["hi"]))
+    assert prob["p"][1, 0] >= prob["p"][0, 0]  # more load, more buckling
+    lo, hi = jr.wilson_interval(0, 10)
+    assert lo == pytest.approx(0.0, abs=1e-12) and 0.2 < hi < 0.35
