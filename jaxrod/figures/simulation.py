@@ -19,6 +19,7 @@ def plot_simulation(scene, sol, path: str) -> None:
     ts = np.asarray(sol.ts)
     stop = float(sol.t_stop)
     keep = ts <= stop + 1e-12
+    keep[: min(2, len(keep))] = True  # at least two frames, also for a rod stuck at once
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(12, 4.5), gridspec_kw={"width_ratios": [1.4, 1]})
     vmax = max(float(np.max(np.abs(theta[keep]))), 1e-12)
     im = ax0.imshow(
@@ -42,7 +43,8 @@ def plot_simulation(scene, sol, path: str) -> None:
     ax1.set_ylabel("normalised modal power")
     ax1.set_yscale("log")
     ax1.set_ylim(1e-8, 1.5)
-    ax1.legend()
+    if ax1.get_legend_handles_labels()[0]:
+        ax1.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
