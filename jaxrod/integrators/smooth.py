@@ -27,6 +27,8 @@ class DiffraxSmooth(AbstractIntegrator):
     - `solver`: a diffrax solver (default `diffrax.Tsit5()`; implicit: `diffrax.Kvaerno5()`).
     - `rtol`, `atol`: tolerances of the PID step-size controller.
     - `dt0`: initial step [s]; `max_steps`: cap on steps (result `max_steps` if reached).
+    - `adjoint`: how diffrax differentiates the solve: the default supports reverse mode;
+      `diffrax.ForwardMode()` supports forward mode (`jax.jvp`, as the boundary search uses).
     """
 
     friction: AbstractFriction = eqx.field(default_factory=lambda: Tanh(1e-3))
@@ -35,6 +37,7 @@ class DiffraxSmooth(AbstractIntegrator):
     atol: float = eqx.field(static=True, default=1e-10)
     dt0: float = eqx.field(static=True, default=1e-5)
     max_steps: int = eqx.field(static=True, default=1_000_000)
+    adjoint: diffrax.AbstractAdjoint = eqx.field(default_factory=diffrax.RecursiveCheckpointAdjoint)
 
     def integrate(self, model, q0, v0, t1, n_save, options=RunOptions()):
         dtype = jnp.result_type(float)
@@ -59,6 +62,7 @@ class DiffraxSmooth(AbstractIntegrator):
             saveat=diffrax.SaveAt(ts=ts),
             stepsize_controller=diffrax.PIDController(rtol=self.rtol, atol=self.atol),
             max_steps=self.max_steps,
+            adjoint=self.adjoint,
             throw=False,
         )
         qs, vs, Ds = sol.ys

@@ -1,0 +1,125 @@
+import json
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod import boundary as bd
+from jaxrod import theory as th
+from jaxrod.cli import main
+
+ROD = jr.RodChannel.reference(mu=0.3)
+
+
+@pytest.mark.parametrize("dF", [1.0, 5.0, 20.0])
+def test_single_mode_critical_velocity_is_p6_in_few_evaluations(dF):
+    F = th.frictionless_load(ROD, 6) + dF
+    k, f = th.stiffness(ROD, 6, F), th.friction_amplitude(ROD)
+    v_p6 = float(ROD.R * th.velocity_intercept(k, f))
+    res, sens = bd.critical_velocity(ROD, dF, model="mode", bracket=(v_p6 / 3, 3 * v_p6),
+                                     sensitivities=("mu", "dF"))
+    assert int(res.result) == 0
+    assert float(res.root) == pytest.approx(v_p6, rel=1e-6)
+    assert int(res.evaluations) <= 8
+    # bisection to the same tolerance needs many more evaluations
+    g = lambda v: bd.single_mode_indicator(v / ROD.R, k, f, f)
+    bis = bd.bisection(g, v_p6 / 3, 3 * v_p6, rtol=1e-6)
+    assert float(bis.root) == pytest.approx(v_p6, rel=1e-6)
+    assert int(bis.evaluations) >= 2 * int(res.evaluations)
+    # IFT sensitivities against the analytic derivatives of v = R f / sqrt(-k):
+    # f is proportional to mu, and dk/dF = -omega^2/rho
+    om2 = (6 * math.pi / 3.0) ** 2
+    assert float(sens["mu"]) == pytest.approx(v_p6 / 0.3, rel=1e-5)
+    dv_dk = float(ROD.R * f / 2 * (-k) ** -1.5)
+    assert float(sens["dF"]) == pytest.approx(dv_dk * (-om2 / float(ROD.rho)), rel=1e-5)
+
+
+def test_single_mode_ift_gives_dAdotcr_df():
+    k, f = -9.0, 1.7
+
+    def g2(x, p):
+        return bd.single_mode_indicator(x, p["k"], p["f"], p["f"])
+
+    vc = float(th.velocity_intercept(k, f))
+    res = bd.safeguarded_newton(lambda x: g2(x, {"k": k, "f": f}), vc / 3, 3 * vc)
+    sens = bd.implicit_sensitivities(g2, res.root, {"k": jnp.asarray(k), "f": jnp.asarray(f)})
+    assert float(sens["f"]) == pytest.approx(1 / math.sqrt(-k), rel=1e-5)  # dȦcr/df = 1/sqrt|k|
+    assert float(sens["k"]) == pytest.approx(f / 2 * (-k) ** -1.5, rel=1e-5)
+
+
+@pytest.mark.parametrize("v_mm", [7.5, 15.0])
+def test_single_mode_critical_load_is_p7(v_mm):
+    v0 = v_mm * 1e-3
+    F0 = th.frictionless_load(ROD, 6)
+    dF_p7 = float(th.critical_load_velocity(ROD, 6, v0 / ROD.R) - F0)
+    res, sens = bd.critical_load(ROD, v0, model="mode", bracket=(dF_p7 / 3, 3 * dF_p7),
+                                 sensitivities=("mu", "amplitude", "R"))
+    assert int(res.result) == 0
+    assert float(res.root) == pytest.approx(dF_p7, rel=1e-6)
+    assert int(res.evaluations) <= 8
+    # P7: dF* = rho f^2/(omega^2 Adot0^2) with f ∝ mu: d/dmu = 2 dF*/mu, d/dv0 = -2 dF*/v0
+    assert float(sens["mu"]) == pytest.approx(2 * dF_p7 / 0.3, rel=1e-5)
+    assert float(sens["amplitude"]) == pytest.approx(-2 * dF_p7 / v0, rel=1e-5)
+    assert abs(float(sens["R"])) < 1e-6 * dF_p7  # R f and F - F0 do not depend on R
+
+
+def test_invalid_bracket_is_reported():
+    g = lambda x: x - 10.0
+    r = bd.safeguarded_newton(g, 1.0, 2.0)
+    assert int(r.result) == bd.ROOT_RESULTS.invalid_bracket
+
+
+def test_field_newton_root_agrees_with_dense_bisection_and_fd_sensitivity():
+    kw = dict(model="field", n=32, dt=1e-3, bracket=(2e-3, 0.2), rtol=1e-10, max_iter=80)
+    res, sens = bd.critical_velocity(ROD, 5.0, sensitivities=("mu",), **kw)
+    assert int(res.result) == 0
+    lo, hi = float(res.lo), float(res.hi)
+    assert lo <= float(res.root) <= hi and (hi - lo) <= 1e-9 * hi
+
+    def buckled(v0):
+        sc = jr.scene.Scene(ROD, 5.0, jr.SineVelocity(v0, 6.0), "field", 32, 6, 1e-3)
+        return bd.rod_indicator(sc) > 0
+
+    # dense bisection on the label, started from a bracket 4x wider than Newton's final one
+    w = hi - lo
+    blo, bhi = jr.search.bisect(buckled, lo - 2 * w, hi + 2 * w, 40, geometric=False)
+    assert abs(0.5 * float(blo + bhi) - float(res.root)) <= 2 * w
+    # dv0*/dmu by IFT against a finite difference of two root solves
+    h = 1e-4
+    up, _ = bd.critical_velocity(ROD.with_friction(0.3 + h), 5.0, sensitivities=(), **kw)
+    dn, _ = bd.critical_velocity(ROD.with_friction(0.3 - h), 5.0, sensitivities=(), **kw)
+    fd = (float(up.root) - float(dn.root)) / (2 * h)
+    assert float(sens["mu"]) == pytest.approx(fd, rel=1e-3)
+
+
+def test_smooth_law_continuation_converges_to_the_sharp_root():
+    k, f = -4.0, 2.0
+    vc = float(th.velocity_intercept(k, f))
+    eps = [1e-1, 1e-2, 1e-3]
+    roots = bd.continuation(lambda x, e: bd.smooth_single_mode_indicator(x, k, f, e), eps, vc / 3, 3 * vc)
+    err = [abs(float(r.root) / vc - 1) for r in roots]
+    print("eps -> relative error of the smooth-law root:", dict(zip(eps, err)))
+    assert all(int(r.result) == 0 for r in roots)
+    assert err[0] > err[1] > err[2] and err[2] < 1e-3
+
+
+def test_cli_boundary_and_critical_load_json(capsys):
+    assert main(["boundary", "--model", "mode", "--dF", "1:20:3", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [set(r) for r in rows] == [{"dF", "v0_star", "evaluations", "result"}] * 3
+    for r in rows:
+        F = th.frictionless_load(ROD, 6) + r["dF"]
+        p6 = float(ROD.R * th.velocity_intercept(th.stiffness(ROD, 6, F), th.friction_amplitude(ROD)))
+        assert r["v0_star"] == pytest.approx(p6, rel=1e-6) and r["result"] == "converged"
+    assert main(["critical-load", "--model", "mode", "--mu", "0.1:0.4:3", "--amplitude", "0.015", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [set(r) for r in rows] == [{"mu", "dF_star", "evaluations", "result"}] * 3
+    ratios = [r["dF_star"] / r["mu"] ** 2 for r in rows]  # P7: dF* ∝ mu^2
+    np.testing.assert_allclose(ratios, ratios[0], rtol=1e-5)
+    assert main(["critical-load", "--model", "field", "--n", "16", "--mu", "0.2:0.4:2", "--perturbation",
+                 "random-velocity", "--amplitude", "0.015", "--realizations", "2", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert {"mu", "dF_star", "evaluations", "result", "dF_star_std"} <= set(rows[0])
