@@ -134,7 +134,9 @@ def safeguarded_newton(
 
     def newton_of(x, gx, dx, lo, hi):
         newton = x - gx / dx
-        ok = jnp.isfinite(newton) & (newton >= lo) & (newton <= hi)
+        # an infinite or zero derivative (overflowing growth, a flat capped indicator) gives no
+        # usable Newton step: bisect instead, and never read it as convergence
+        ok = jnp.isfinite(newton) & jnp.isfinite(dx) & (dx != 0) & (newton >= lo) & (newton <= hi)
         small = ok & ((jnp.abs(newton - x) <= rtol * jnp.abs(x)) | (gx == 0))
         return newton, ok, small
 
