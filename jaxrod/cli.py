@@ -408,6 +408,23 @@ def _plot_curve(path, x, y, ok, theory_y, p, se, c, xlabel, ylabel, scale, title
     plt.close(fig)
 
 
+def _cmd_reproduce(args) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from .reproduce import reproduce
+
+    which = ["all"] if "all" in args.which else args.which
+    try:
+        res = reproduce(which, args.out, quick=args.quick, progress=not args.quiet)
+    except ValueError as err:
+        _fail(str(err))
+    print(f"wrote {args.out}/results.json and figures under {args.out}/<experiment>/")
+    for name, r in res.items():
+        print(f"  {name}: {r.get('seconds', '?')} s")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="jaxrod", description="Dynamics and stability of a rod in a channel with dry friction.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -479,6 +496,13 @@ def build_parser() -> argparse.ArgumentParser:
     cl.add_argument("--json", action="store_true")
     cl.set_defaults(func=_cmd_critical_load)
 
+    rp = sub.add_parser("reproduce", help="reproduce the paper's experiments E2-E6 (reduced models)")
+    rp.add_argument("which", nargs="+", choices=["e2", "e3", "e4", "e5", "e6", "all"])
+    rp.add_argument("--out", default="results/paper")
+    rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
+    rp.add_argument("--quiet", action="store_true")
+    rp.set_defaults(func=_cmd_reproduce)
+
     fg = sub.add_parser("figure", help="write a figure")
     fg.add_argument("which", choices=["phase"], help="phase: E2 phase portraits")
     fg.add_argument("--out", default="results", help="output folder (default: results)")
@@ -499,7 +523,7 @@ def _use_all_cpu_cores() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    if args.command in ("map", "boundary", "critical-load"):
+    if args.command in ("map", "boundary", "critical-load", "reproduce"):
         _use_all_cpu_cores()
     return args.func(args)
 

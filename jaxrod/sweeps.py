@@ -337,8 +337,8 @@ def _static_resolution(spec: SweepSpec, flat: dict[str, np.ndarray]):
         n = 32
     dt = spec.dt
     if dt is None:
-        dt = min(Scene(r, jnp_.zeros(()), kind=spec.model, n=n, mode=spec.mode).step() for r in rods)
-    grid_dt = min(Scene(r, jnp_.zeros(()), kind="field", n=128).step() for r in rods)
+        dt = min(Scene(r, jnp_.asarray(dF_max), kind=spec.model, n=n, mode=spec.mode).step() for r in rods)
+    grid_dt = min(Scene(r, jnp_.asarray(dF_max), kind="field", n=128).step() for r in rods)
     return n, float(dt), float(grid_dt)
 
 

@@ -65,7 +65,7 @@ def worst_case_velocity(
     critical norms of `n_random` random directions.
     """
     dt_ = dt or Scene(rod, 0.0, kind="field", n=n).step()
-    s_nodes = jnp.arange(1, n + 1) * rod.L / (n + 1)
+    s_nodes = jnp.arange(1, n + 1, dtype=rod.L.dtype) * rod.L / (n + 1)
 
     def g(scale, xi):
         u = scale * xi / field_norm(xi, norm)
@@ -93,7 +93,8 @@ def worst_case_velocity(
     norms = jnp.concatenate([norm_sine[None], jnp.where(rand_res == 0, rand_norms, jnp.inf)])
     xi = cands[int(jnp.argmin(norms))]
     opt = optax.adam(learning_rate)
-    state = opt.init(xi)
+    with jax.numpy_dtype_promotion("standard"):
+        state = opt.init(xi)
     best_xi, best = xi, float(jnp.min(norms))
     history = [best]
     for _ in range(steps):
@@ -103,9 +104,11 @@ def worst_case_velocity(
         history.append(float(root))
         grad = grad_critical(xi, root)
         grad = jnp.where(jnp.isfinite(grad), grad, 0.0)
-        # scale-free step: the direction, not its length, matters
-        upd, state = opt.update(grad / (jnp.linalg.norm(grad) + 1e-30) * jnp.linalg.norm(xi), state)
-        xi = optax.apply_updates(xi, upd)
+        # scale-free step: the direction, not its length, matters. optax mixes its int32 step
+        # count with floats, which a user's strict dtype promotion would refuse.
+        with jax.numpy_dtype_promotion("standard"):
+            upd, state = opt.update(grad / (jnp.linalg.norm(grad) + 1e-30) * jnp.linalg.norm(xi), state)
+            xi = optax.apply_updates(xi, upd)
     u = best * best_xi / field_norm(best_xi, norm)
     spectrum = np.asarray(modal_spectrum(u, min(n, 40)))
     # single-mode prediction: P6 intercept of every unstable mode, as a field norm
