@@ -18,7 +18,11 @@ from .integrators import SplitLinearFriction as SplitLinearFriction
 from .integrators import SymplecticEuler as SymplecticEuler
 from . import modal as modal
 from . import perturbations as perturbations
+from . import boundary as boundary
+from . import scene as scene
 from . import search as search
+from . import stability_map as stability_map
+from . import worst_case as worst_case
 from .sweeps import SweepResult as SweepResult
 from .sweeps import SweepSpec as SweepSpec
 from .sweeps import sweep as sweep

@@ -243,6 +243,21 @@ def rod_indicator(scene: Scene, t1: float = 0.5):
 
 # -- user-level searches -------------------------------------------------------------------------
 
+def _resolution(rod, dF, model, n, mode, dt):
+    """Static n and dt from concrete values (the largest load of the search)."""
+    if n is not None and dt is not None:
+        return n, dt
+    try:
+        probe = Scene(rod, dF, kind=model, n=n, mode=mode, dt=dt)
+        n = probe.nodes() if model == "field" else (n or 32)
+        return n, probe.step()
+    except (ValueError, jax.errors.ConcretizationTypeError):
+        raise ValueError(
+            "pass n and dt explicitly when the rod or the load is traced (e.g. under vmap): "
+            "they are static settings."
+        ) from None
+
+
 def _scene(rod, dF, v0, kind, n, mode, dt, perturbation, key):
     pert = make_perturbation(perturbation, v0, mode, key)
     return Scene(rod, dF, pert, kind, n, mode, dt)
@@ -298,6 +313,8 @@ def critical_velocity(
         def g2(v0, p):
             return rod_indicator(_scene(rod_of(p), p["dF"], v0, model, n, mode, dt, perturbation, key), t1)
 
+    if model != "mode":
+        n, dt = _resolution(rod, dF, model, n, mode, dt)
     params = params_of(rod, dF)
     res = safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter)
     sens = {}
@@ -357,6 +374,8 @@ def critical_load(
                 _scene(rod_of(p), dF, p["amplitude"], model, n, mode, dt, perturbation, key), t1
             )
 
+    if model != "mode":
+        n, dt = _resolution(rod, bracket[1], model, n, mode, dt)
     # Loads span decades and the indicator depends on them through λ ∝ √ΔF: Newton works on
     # log ΔF (6 evaluations instead of 9 for P7 from a factor-10 bracket).
     lo, hi = jnp.log(jnp.asarray(bracket[0], dtype)), jnp.log(jnp.asarray(bracket[1], dtype))

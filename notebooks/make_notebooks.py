@@ -1,0 +1,147 @@
+"""Writes the research notebooks 01-06 (run: python notebooks/make_notebooks.py).
+
+Each notebook has a size switch: with JAXROD_NB_SMALL=1 (what the test suite sets) it runs in
+seconds; otherwise at a resolution worth looking at, still minutes on a CPU.
+"""
+
+import os
+
+import nbformat as nbf
+
+HEAD = '''import os
+import jax
+jax.config.update("jax_enable_x64", True)
+import numpy as np
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import jaxrod as jr
+
+SMALL = os.environ.get("JAXROD_NB_SMALL", "0") == "1"   # the size switch
+rod = jr.RodChannel.reference(mu=0.3)                     # the reference paper's nitinol rod'''
+
+NOTEBOOKS = {
+    "01_quick_start": [
+        ("md", "# 01 Quick start\nTheory numbers, one simulation and one small stability map for the reference rod."),
+        ("code", HEAD),
+        ("md", "## Theory (PHYSICS.md P3-P7)"),
+        ("code", '''m = int(jr.theory.critical_mode(rod))
+print("F0cr (continuous) =", float(jr.theory.critical_load_continuous(rod)), "N; critical mode", m,
+      "with F0_m =", float(jr.theory.frictionless_load(rod, m)), "N")
+mode = jr.SingleMode.from_rod(rod, dF=5.0)
+v_cr = float(rod.R * jr.theory.velocity_intercept(mode.k, mode.f_d))
+print(f"critical lateral speed of mode {m} at dF = 5 N: {1e3 * v_cr:.2f} mm/s")
+assert m == 6'''),
+        ("md", "## One simulation of the field model"),
+        ("code", '''scene = jr.scene.Scene(rod, 5.0, jr.SineVelocity(0.03, 6.0), "field", n=32 if SMALL else 128)
+sol = scene.run(t1=0.2 if SMALL else 2.0, n_save=401)
+print("buckled:", bool(sol.buckled), "at t =", float(sol.t_buckle), "s; energy balance error",
+      float(sol.energy_balance_error()))
+plt.plot(sol.ts, sol.amplitude); plt.xlabel("t [s]"); plt.ylabel("max |theta| [rad]"); plt.yscale("log")'''),
+        ("md", "## A small stability map (E3)"),
+        ("code", '''k = 5 if SMALL else 12
+res = jr.sweep(jr.SweepSpec(model="field", n=32 if SMALL else 128, t1=0.5 if SMALL else 2.0),
+               {"dF": np.geomspace(1, 40, k), "amplitude": np.geomspace(2e-3, 0.1, k)}, progress=False)
+print(res.summary())
+b = res.grid("buckled")
+plt.figure(); plt.pcolormesh(np.geomspace(1, 40, k), 1e3 * np.geomspace(2e-3, 0.1, k), b.T, shading="nearest")
+plt.xscale("log"); plt.yscale("log"); plt.xlabel("dF [N]"); plt.ylabel("v0 [mm/s]")'''),
+    ],
+    "02_stable_zone": [
+        ("md", "# 02 The stable zone and the phase plane\nThe single-mode oscillator A'' + kA + f sgn(A') = 0 under load (k < 0): the analytic zone against a vmapped projected-Verlet classification."),
+        ("code", HEAD),
+        ("code", '''k, f = -4.0, 2.0
+A_b, V_b = jr.theory.stable_zone_boundary(k, f, n=200, extent=10)
+N = 20 if SMALL else 60
+A, V = np.meshgrid(np.linspace(-1.5, 1.5, N), np.linspace(-3, 3, N))
+model = jr.SingleMode(k, f, f)
+run = jax.vmap(lambda a, v: jr.simulate(model, jr.ProjectedVerlet(3e-3), a, v, 15.0, n_save=2, throw=False).stuck[-1])
+stable = np.asarray(run(A.ravel(), V.ravel())).reshape(A.shape)
+zone = np.asarray(jr.theory.in_stable_zone(A, V, k, f))
+print("agreement with the analytic zone:", (stable == zone).mean())
+plt.fill(A_b, V_b, alpha=0.3); plt.scatter(A[stable], V[stable], s=4, c="g"); plt.scatter(A[~stable], V[~stable], s=4, c="r")
+plt.xlim(-1.5, 1.5); plt.ylim(-3, 3); plt.xlabel("A"); plt.ylabel("dA/dt")
+assert (stable == zone).mean() > 0.95'''),
+        ("code", '''for v0 in (0.9, 1.1):  # just inside / outside the velocity intercept f/sqrt|k| = 1
+    sol = jr.simulate(model, jr.Exact(), 0.0, v0, 6.0, n_save=600)
+    plt.plot(sol.q, sol.v, label=f"v0 = {v0}")
+plt.legend(); plt.xlim(-1.5, 3)'''),
+    ],
+    "03_stability_maps": [
+        ("md", "# 03 Stability maps (E3)\nStraight or buckled over (dF, v0), with and without friction, and the fitted boundary."),
+        ("code", HEAD),
+        ("code", '''n_dF, n_v = (5, 6) if SMALL else (16, 20)
+summary = jr.stability_map.stability_map(mus=(0.3, 0.0), dF=np.geomspace(0.5, 64, n_dF), v0=np.geomspace(1e-3, 0.2, n_v),
+                                         n=32 if SMALL else None, out="nb03_map", progress=False, t1=0.5 if SMALL else 2.0)
+fric = summary["maps"]["0.3"]
+print("boundary exponent:", fric["exponent"], "+/-", fric["exponent_stderr"], "(theory -0.5)")
+print("largest stable dF/F0cr:", fric["largest_stable_dF_over_F0cr"])
+assert summary["maps"]["0"]["stable"] == 0'''),
+        ("code", '''from IPython.display import Image
+Image("nb03_map/map.png")'''),
+    ],
+    "04_friction_power_laws": [
+        ("md", "# 04 Friction power laws (E4)\nThe critical load above F0_6 against mu, by root search, for a sine and a random velocity perturbation."),
+        ("code", HEAD),
+        ("code", '''mus = np.geomspace(0.05, 1.0, 3 if SMALL else 8)
+n = 24 if SMALL else None
+sine, _ = jr.boundary.critical_load_curve(mus, 15e-3, perturbation="sine", n=n, bracket=(1e-3, 300.0))
+rand, _ = jr.boundary.critical_load_curve(mus, 15e-3, perturbation="random-velocity", realizations=2 if SMALL else 8,
+                                          n=n, bracket=(1e-3, 300.0))
+F_sine = np.asarray(sine.root)[:, 0]
+F_rand = np.asarray(rand.root).mean(axis=1)
+p1 = jr.stability_map.fit_power_law(mus, F_sine)[0]
+p2 = jr.stability_map.fit_power_law(mus, F_rand)[0]
+print(f"sine: dF* ~ mu^{p1:.2f} (single-mode theory 2); random velocity: mu^{p2:.2f}")
+plt.loglog(mus, F_sine, "o-", label="sine 15 mm/s"); plt.loglog(mus, F_rand, "s-", label="random velocity 15 mm/s")
+p7 = [float(jr.theory.critical_load_velocity(rod.with_friction(m), 6, 15e-3 / rod.R) - jr.theory.frictionless_load(rod, 6)) for m in mus]
+plt.loglog(mus, p7, "k--", label="P7"); plt.legend(); plt.xlabel("mu"); plt.ylabel("dF* [N]")
+assert np.isfinite(p1) and np.isfinite(p2)'''),
+    ],
+    "05_mode_selection": [
+        ("md", "# 05 Mode selection (E5)\nWhich mode buckles: the P6 intercepts of modes 2-10 against the load, and the dominant mode of random-perturbation runs."),
+        ("code", HEAD),
+        ("code", '''F = np.linspace(1.0, 20.0, 200)
+f = float(jr.theory.friction_amplitude(rod))
+for m in (2, 4, 6, 8, 10):
+    k = np.asarray(jr.theory.stiffness(rod, m, F))
+    plt.semilogy(F, np.where(k < 0, 1e3 * float(rod.R) * f / np.sqrt(np.abs(k)), np.nan), label=f"mode {m}")
+plt.legend(); plt.xlabel("F [N]"); plt.ylabel("R Adot_cr [mm/s]")'''),
+        ("code", '''R = 3 if SMALL else 16
+res = jr.sweep(jr.SweepSpec(model="field", n=32 if SMALL else 128, perturbation="random-velocity", t1=0.5 if SMALL else 2.0),
+               {"mu": [0.1, 0.5], "dF": [10.0], "amplitude": [0.05], "realization": np.arange(R)}, progress=False)
+modes = res.grid("dominant_mode")[:, 0, 0, :]
+buck = res.grid("buckled")[:, 0, 0, :]
+for mu, m, b in zip((0.1, 0.5), modes, buck):
+    print(f"mu = {mu}: buckled {b.sum()}/{len(b)}, dominant modes {sorted(m[b].tolist())}")'''),
+    ],
+    "06_boundary_search": [
+        ("md", "# 06 Boundary search and sensitivities\nThe critical velocity by safeguarded Newton, its sensitivities by the implicit function theorem, and the worst-case perturbation."),
+        ("code", HEAD),
+        ("code", '''res, sens = jr.boundary.critical_velocity(rod, 5.0, model="mode", bracket=(5e-3, 0.1))
+F = jr.theory.frictionless_load(rod, 6) + 5.0
+p6 = float(rod.R * jr.theory.velocity_intercept(jr.theory.stiffness(rod, 6, F), jr.theory.friction_amplitude(rod)))
+print("single mode: v0* =", float(res.root), "P6 =", p6, "evaluations", int(res.evaluations))
+print("dv0*/dmu =", float(sens["mu"]), "(analytic", p6 / 0.3, ")")
+assert abs(float(res.root) / p6 - 1) < 1e-6'''),
+        ("code", '''res, sens = jr.boundary.critical_velocity(rod, 5.0, model="field", n=32 if SMALL else 128, bracket=(2e-3, 0.2), rtol=1e-6)
+print("field model: v0* =", float(res.root), "m/s in", int(res.evaluations), "evaluations; dv0*/dmu =", float(sens["mu"]))'''),
+        ("code", '''wc = jr.worst_case.worst_case_velocity(rod, 5.0, n=24 if SMALL else 32, steps=4 if SMALL else 30, n_random=4 if SMALL else 16)
+print("worst-case RMS speed", wc["norm_worst"], "vs sine mode 6", wc["norm_sine"], "; dominant mode", wc["dominant_mode"])
+plt.bar(np.arange(1, len(wc["spectrum"]) + 1), wc["spectrum"]); plt.xlabel("mode"); plt.ylabel("power")
+assert wc["norm_worst"] <= wc["norm_sine"]'''),
+    ],
+}
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    for name, cells in NOTEBOOKS.items():
+        nb = nbf.v4.new_notebook()
+        nb.cells = [nbf.v4.new_markdown_cell(src) if kind == "md" else nbf.v4.new_code_cell(src) for kind, src in cells]
+        nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+        nbf.write(nb, os.path.join(here, f"{name}.ipynb"))
+
+
+if __name__ == "__main__":
+    main()
