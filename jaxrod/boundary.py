@@ -243,6 +243,18 @@ def rod_indicator(scene: Scene, t1: float = 0.5):
 
 # -- user-level searches -------------------------------------------------------------------------
 
+_ROD_KEYS = ("L", "d", "E", "rho_v", "nu", "R", "g")
+
+
+def _params_of(rod, **extra) -> dict:
+    """The rod's numbers as a flat dict of leaves (μ_s = μ_d = `mu`), plus `extra`."""
+    return {"mu": rod.mu_d, **{f: getattr(rod, f) for f in _ROD_KEYS}, **extra}
+
+
+def _rod_of(rod_type, p: dict):
+    return rod_type(*(p[f] for f in _ROD_KEYS), p["mu"], p["mu"])
+
+
 def _resolution(rod, dF, model, n, mode, dt):
     """Static n and dt from concrete values (the largest load of the search)."""
     if n is not None and dt is not None:
@@ -294,14 +306,7 @@ def critical_velocity(
     dF = jnp.asarray(dF, dtype)
     key = jax.random.key(0) if key is None else key
 
-    def params_of(rod, dF):
-        p = {"dF": dF, "mu": rod.mu_d}
-        for f in ("L", "d", "E", "rho_v", "nu", "R", "g"):
-            p[f] = getattr(rod, f)
-        return p
-
-    def rod_of(p):
-        return type(rod)(p["L"], p["d"], p["E"], p["rho_v"], p["nu"], p["R"], p["g"], p["mu"], p["mu"])
+    rod_of = lambda p: _rod_of(type(rod), p)
 
     if model == "mode":
         def g2(v0, p):
@@ -315,7 +320,7 @@ def critical_velocity(
 
     if model != "mode":
         n, dt = _resolution(rod, dF, model, n, mode, dt)
-    params = params_of(rod, dF)
+    params = _params_of(rod, dF=dF)
     res = safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter)
     sens = {}
     if sensitivities:
@@ -355,12 +360,8 @@ def critical_load(
     amplitude = jnp.asarray(amplitude, dtype)
     key = jax.random.key(0) if key is None else key
 
-    def rod_of(p):
-        return type(rod)(p["L"], p["d"], p["E"], p["rho_v"], p["nu"], p["R"], p["g"], p["mu"], p["mu"])
-
-    params = {"amplitude": amplitude, "mu": rod.mu_d}
-    for f in ("L", "d", "E", "rho_v", "nu", "R", "g"):
-        params[f] = getattr(rod, f)
+    rod_of = lambda p: _rod_of(type(rod), p)
+    params = _params_of(rod, amplitude=amplitude)
 
     if model == "mode":
         def g2(dF, p):
