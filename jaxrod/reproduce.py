@@ -114,9 +114,8 @@ def _frictionless_dF(s, amplitude, perturbation):
 
 
 def e4(out, quick, progress):
-    import jax  # noqa: F401
-
     from .boundary import critical_load_curve
+    from .scene import default_nodes
 
     s = _settings(quick)
     mus = s["mus"]
@@ -130,7 +129,8 @@ def e4(out, quick, progress):
         ("random velocity ±15 mm/s", "random-velocity", 15e-3, R, None),
         ("random position (forces ±2 N/m for 1 ms)", "random-position", 2.0, R, 1.0),
     ]
-    rows, res = [], {"model": "field", "n": s["n"] or "default_nodes(100 N)", "mu": mus.tolist(),
+    n_used = s["n"] or default_nodes(rod, float(theory.frictionless_load(rod, 6)) + s["max_dF"])
+    rows, res = [], {"model": "field", "n": n_used, "mu": mus.tolist(),
                      "dF_measured_from": f"F0_6 = {F0:.4f} N (F0cr continuous = {F0cr:.4f} N)"}
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 5))
