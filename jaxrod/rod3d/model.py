@@ -1,0 +1,527 @@
+r"""The full model: a 3D discrete Cosserat rod inside the channel, with wall contact and static
+and dynamic Coulomb friction.
+
+**Discretisation.** `n` straight segments between `n + 1` nodes. Node i has position
+xᵢ ∈ ℝ³ and velocity vᵢ; segment j has directors Qⱼ (rows d₁, d₂, d₃ in the lab frame,
+d₃ along the segment) and angular velocity ωⱼ in its own (material) frame, Q̇ = −[ω]×Q.
+Reference segment length l̂ = L/n; node i carries mass ρ·l̄ᵢ with l̄ᵢ its Voronoi length
+(l̂, or l̂/2 at the ends); segment j has rotary inertia ρ_v l̂ · diag(α I, α I, 2I).
+
+**Elastic energy** (a discrete Timoshenko–Cosserat rod, as in Gazzola et al. 2018, but
+written as one energy whose gradient gives forces and torques):
+
+- stretch and shear of segment j, with σⱼ = Qⱼ(x_{j+1} − xⱼ)/l̂ − e₃ (material frame):
+  U = ½ l̂ (κGA (σ₁² + σ₂²) + EA σ₃²), κ = 6(1 + ν)/(7 + 6ν) (circular section);
+- bend and twist at interior node i, with the curvature ψᵢ/l̂, ψᵢ = log(Qᵢ Q_{i−1}ᵀ) the
+  rotation vector between adjacent segments: U = ½ l̂ (EI (κ₁² + κ₂²) + GJ κ₃²);
+- gravity −g e_z on the node masses; an optional body force per length (for tests);
+- **wall contact**: the centre line may move on the cylinder of radius R (the clearance);
+  a node beyond it by δ = r − R > 0 (r its distance from the channel axis) is pushed back
+  by the Hertz-type force l̄ᵢ k δ^{3/2} (1 + ζ δ̇) along the inward radius (Hunt–Crossley
+  damping ζ; energy l̄ᵢ (2/5) k δ^{5/2}). The rod lifts off freely (no force for δ ≤ 0).
+
+Forces are −∂U/∂x and material torques −∂U/∂φ for the variation Q → (I − [φ]×)Q, both by
+one reverse-mode gradient. Rotations obey Euler's equations J ω̇ = τ − ω × Jω.
+
+**Friction** acts at the contact point on the rod's surface, x + (d/2) e_r (e_r the outward
+radius), so it both translates the node and spins the adjacent segments (half the torque to
+each): the rod can roll and twist. The slip velocity u ∈ ℝ² (axial, circumferential) is the
+contact point's tangential velocity. The sharp law is the exact proximal step of the
+vector Coulomb law with the point's 2×2 inverse mass W: stick (u → 0) while the impulse
+needed, |W⁻¹u|, is within μ_s N h; otherwise slip with the impulse of magnitude μ_d N h
+that maximises dissipation (a 1D secular equation solved by Newton). Even and odd nodes
+share no segment, so the step is exact on the even nodes and then on the odd ones
+(red–black); within one step a stuck even node can thus be nudged by its odd neighbours'
+impulses, which the next step corrects. The smooth law is μ_d N tanh(|u|/ε) along −u/|u|.
+
+**Rotary inertia scaling α.** A segment rotating against its shear spring has frequency
+4√(κG/ρ_v)/(d√α), which for a thin rod (d = 1.5 mm) is 5e6 rad/s at α = 1 and would set an
+explicit step of 4e-7 s, far below the axial wave's l̂/c. By default α is the smallest value
+≥ 1 that brings that frequency down to the axial wave's 2c/l̂ (α = 533 for 100 segments on
+the reference rod). It only scales the transverse rotary inertia, whose effect on bending
+is the Rayleigh correction ~ α(ωₘ d/4)²/2 (1.5e-3 for mode 6 at α = 533); the polar inertia,
+which governs rolling, is never scaled. Set `rotary_scale=1` for the unscaled rod.
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Bool, Float
+
+from ..friction import AbstractFriction, Coulomb, Tanh
+from ..params import RodChannel, _concrete
+from .so3 import exp_so3, log_so3, safe_norm, skew
+
+__all__ = ["Rod3D", "Rod3DState"]
+
+E3 = np.array([0.0, 0.0, 1.0])
+# Directors of a straight rod along x: d1 = y, d2 = z, d3 = x (right-handed).
+Q_STRAIGHT = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+
+
+class Rod3DState(eqx.Module):
+    """The state of the discrete rod (SI units)."""
+
+    x: Float[Array, "n1 3"]  # node positions [m]
+    v: Float[Array, "n1 3"]  # node velocities [m/s]
+    Q: Float[Array, "n 3 3"]  # segment directors (rows), lab → material
+    w: Float[Array, "n 3"]  # segment angular velocities, material frame [rad/s]
+    stuck: Bool[Array, " n1"]  # contact held by static friction at the last step
+    t: Float[Array, ""]  # time [s]
+
+
+def _leaf(x, dtype=None):
+    return jnp.asarray(x, dtype=jnp.result_type(float) if dtype is None else dtype)
+
+
+class Rod3D(eqx.Module):
+    """The discrete 3D rod in the channel. See the module docstring for every equation.
+
+    **Arguments:**
+
+    - `rod`: the [`jaxrod.RodChannel`][] (material, section, clearance R, μ_s, μ_d).
+    - `n_segments`: number of segments n ≥ 4 (static).
+    - `channel`: with the channel wall (`True`) or a free rod in space (`False`, static).
+    - `ends`: `"pinned"` (end nodes held, rotations free), `"clamped"` (end nodes held and end
+      segments' rotations held) or `"free"` (static).
+    - `control`: `"force"` (ends held where the initial state puts them: a pre-compressed rod
+      keeps its axial force until it deforms, E3), `"load"` (a dead load: node n free along x
+      and pushed by the constant force `end_load`, as in the reduced models) or
+      `"displacement"` (node 0 held, node n pushed along −x at `speed`, E1) (static).
+    - `end_load`: the dead load [N] for `control="load"`.
+    - `speed`: pushing speed [m/s] for displacement control, ≥ 0.
+    - `friction`: [`jaxrod.Coulomb`][] (exact set-valued law) or [`jaxrod.Tanh`][] (`eps` in m/s).
+    - `contact_stiffness`: Hertz constant k [N/m^2.5] per unit length; default: the rod sinks
+      1e-3·R into the wall under its own weight, k = w/(1e-3 R)^{3/2}.
+    - `contact_damping`: Hunt–Crossley ζ [s/m], ≥ 0 (default 0: energy is conserved at μ = 0).
+    - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (for
+      quasi-static tests; 0 by default).
+    - `rotary_scale`: α ≥ 1 on the transverse rotary inertia (default: see module docstring).
+    - `body_force`: extra force per length [N/m], a 3-vector (default 0).
+    - `gravity`: include gravity (static, default True).
+    """
+
+    rod: RodChannel
+    n_segments: int = eqx.field(static=True)
+    channel: bool = eqx.field(static=True)
+    ends: str = eqx.field(static=True)
+    control: str = eqx.field(static=True)
+    gravity: bool = eqx.field(static=True)
+    friction: AbstractFriction
+    speed: Float[Array, ""]
+    end_load: Float[Array, ""]
+    contact_stiffness: Float[Array, ""]
+    contact_damping: Float[Array, ""]
+    damping: Float[Array, ""]
+    rotary_scale: Float[Array, ""]
+    shear_coefficient: Float[Array, ""]
+    body_force: Float[Array, "3"]
+
+    def __init__(
+        self,
+        rod: RodChannel,
+        n_segments: int = 100,
+        *,
+        channel: bool = True,
+        ends: str = "pinned",
+        control: str = "force",
+        speed: ArrayLike = 0.0,
+        end_load: ArrayLike = 0.0,
+        friction: AbstractFriction = Coulomb(),
+        contact_stiffness: ArrayLike | None = None,
+        contact_damping: ArrayLike = 0.0,
+        damping: ArrayLike = 0.0,
+        rotary_scale: ArrayLike | None = None,
+        body_force: ArrayLike = (0.0, 0.0, 0.0),
+        gravity: bool = True,
+    ):
+        if not (isinstance(n_segments, (int, np.integer)) and n_segments >= 4):
+            raise ValueError(f"Rod3D.n_segments = {n_segments!r} is invalid: expected an int >= 4.")
+        if ends not in ("pinned", "clamped", "free"):
+            raise ValueError(f"Rod3D.ends = {ends!r} is invalid: expected 'pinned', 'clamped' or 'free'.")
+        if control not in ("force", "load", "displacement"):
+            raise ValueError(f"Rod3D.control = {control!r} is invalid: expected 'force', 'load' or 'displacement'.")
+        if not isinstance(friction, (Coulomb, Tanh)):
+            raise ValueError(f"Rod3D.friction = {friction!r} is invalid: expected jaxrod.Coulomb() or jaxrod.Tanh(eps).")
+        self.rod = rod
+        self.n_segments = int(n_segments)
+        self.channel = bool(channel)
+        self.ends = ends
+        self.control = control
+        self.gravity = bool(gravity)
+        self.friction = friction
+        self.speed = _leaf(speed)
+        self.end_load = _leaf(end_load)
+        l0 = rod.L / n_segments
+        if contact_stiffness is None:
+            contact_stiffness = rod.w / (1e-3 * rod.R) ** 1.5
+        self.contact_stiffness = _leaf(contact_stiffness)
+        self.contact_damping = _leaf(contact_damping)
+        self.damping = _leaf(damping)
+        kappa = 6.0 * (1.0 + rod.nu) / (7.0 + 6.0 * rod.nu)
+        self.shear_coefficient = _leaf(kappa)
+        if rotary_scale is None:
+            # 4√(κG/ρ_v)/(d√α) = 2c/l̂  ⇒  α = 4 κ (G/E) (l̂/d)²
+            rotary_scale = jnp.maximum(1.0, 4.0 * kappa * (rod.G / rod.E) * (l0 / rod.d) ** 2)
+        self.rotary_scale = _leaf(rotary_scale)
+        self.body_force = _leaf(body_force)
+        for name, lo in (("speed", 0.0), ("contact_damping", 0.0), ("damping", 0.0)):
+            v = _concrete(getattr(self, name))
+            if v is not None and not (np.all(np.isfinite(v)) and np.all(v >= lo)):
+                raise ValueError(f"Rod3D.{name} = {v!r} is invalid: it must be finite and >= {lo}.")
+        v = _concrete(self.contact_stiffness)
+        if v is not None and not (np.all(np.isfinite(v)) and np.all(v > 0)):
+            raise ValueError(f"Rod3D.contact_stiffness = {v!r} N/m^2.5 is invalid: it must be finite and > 0.")
+        v = _concrete(self.rotary_scale)
+        if v is not None and not (np.all(np.isfinite(v)) and np.all(v >= 1.0)):
+            raise ValueError(f"Rod3D.rotary_scale = {v!r} is invalid: it must be finite and >= 1.")
+
+    # -- discretisation --------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        return self.n_segments
+
+    @property
+    def l0(self):
+        """Reference segment length l̂ = L/n [m]."""
+        return self.rod.L / self.n
+
+    @property
+    def voronoi(self) -> Float[Array, " n1"]:
+        """Length l̄ᵢ attached to each node [m]."""
+        w = jnp.ones(self.n + 1).at[0].set(0.5).at[-1].set(0.5)
+        return w * self.l0
+
+    @property
+    def mass(self) -> Float[Array, " n1"]:
+        return self.rod.rho * self.voronoi
+
+    @property
+    def inertia(self) -> Float[Array, "3"]:
+        """Segment rotary inertia in the material frame [kg·m²]."""
+        I = self.rod.I
+        return self.rod.rho_v * self.l0 * jnp.stack([self.rotary_scale * I, self.rotary_scale * I, 2.0 * I])
+
+    @property
+    def g_vec(self):
+        g = self.rod.g if self.gravity else 0.0 * self.rod.g
+        return jnp.stack([0.0 * g, 0.0 * g, -g])
+
+    def held(self) -> tuple[Bool[Array, "n1 3"], Bool[Array, " n"]]:
+        """Which node velocity components are prescribed, and which segments' rotations."""
+        nodes = np.zeros((self.n + 1, 3), bool)
+        segs = np.zeros(self.n, bool)
+        if self.ends != "free":
+            nodes[[0, -1]] = True
+            if self.control == "load":
+                nodes[-1, 0] = False
+        if self.ends == "clamped":
+            segs[[0, -1]] = True
+        return jnp.asarray(nodes), jnp.asarray(segs)
+
+    def prescribed_velocity(self) -> Float[Array, "n1 3"]:
+        """Velocity of the held nodes (the pushed end moves along −x at `speed`)."""
+        v = jnp.zeros((self.n + 1, 3), dtype=self.speed.dtype)
+        if self.control == "displacement":
+            v = v.at[-1, 0].set(-self.speed)
+        return v
+
+    # -- energies --------------------------------------------------------------------------
+    def strains(self, x, Q):
+        """Shear/stretch strains σ (n, 3) and curvatures κ (n−1, 3), material frame."""
+        e = x[1:] - x[:-1]
+        sigma = jnp.einsum("jab,jb->ja", Q, e) / self.l0 - jnp.asarray(E3, e.dtype)[None, :]
+        R = jnp.einsum("jab,jcb->jac", Q[1:], Q[:-1])  # Qᵢ Q_{i−1}ᵀ
+        kappa = log_so3(R) / self.l0
+        return sigma, kappa
+
+    def elastic_terms(self, x, Q) -> dict[str, Float[Array, ""]]:
+        rod = self.rod
+        sigma, kappa = self.strains(x, Q)
+        kGA = self.shear_coefficient * rod.GA
+        l0 = self.l0
+        return dict(
+            stretch=0.5 * l0 * rod.EA * jnp.sum(sigma[:, 2] ** 2),
+            shear=0.5 * l0 * kGA * jnp.sum(sigma[:, :2] ** 2),
+            bend=0.5 * l0 * rod.EI * jnp.sum(kappa[:, :2] ** 2),
+            twist=0.5 * l0 * rod.GJ * jnp.sum(kappa[:, 2] ** 2),
+        )
+
+    def penetration(self, x) -> tuple[Float[Array, " n1"], Float[Array, "n1 3"]]:
+        """Penetration δ = r − R of each node beyond the clearance (negative: a gap) and the
+        outward radial unit e_r."""
+        yz = x[:, 1:]
+        r = safe_norm(yz)
+        rs = jnp.where(r > 0, r, 1.0)
+        down = jnp.broadcast_to(jnp.array([0.0, -1.0], x.dtype), yz.shape)
+        e_r = jnp.concatenate([jnp.zeros_like(r)[:, None], jnp.where(r[:, None] > 0, yz / rs[:, None], down)], -1)
+        return r - self.rod.R, e_r
+
+    def contact_energy(self, x):
+        if not self.channel:
+            return jnp.zeros((), x.dtype)
+        delta, _ = self.penetration(x)
+        pen = jnp.maximum(delta, 0.0)
+        return jnp.sum(self.voronoi * self.contact_stiffness * 0.4 * pen**2.5)
+
+    def external_energy(self, x):
+        """Gravity (zero on the channel bottom, z = −R) and body-force potentials [J]."""
+        grav = -jnp.sum(self.mass * (x[:, 2] + self.rod.R)) * self.g_vec[2]
+        body = -jnp.sum(self.voronoi * (x @ self.body_force))
+        if self.control == "load":
+            body = body + self.end_load * x[-1, 0]
+        return grav + body
+
+    def potential(self, x, Q):
+        return sum(self.elastic_terms(x, Q).values()) + self.contact_energy(x) + self.external_energy(x)
+
+    def kinetic_terms(self, v, w):
+        return dict(
+            kinetic=0.5 * jnp.sum(self.mass[:, None] * v**2),
+            rotational=0.5 * jnp.sum(self.inertia[None, :] * w**2),
+        )
+
+    def energy_terms(self, s: Rod3DState) -> dict[str, Float[Array, ""]]:
+        """Every energy by kind [J]: kinetic, rotational, stretch, shear, bend, twist,
+        gravity (+ body force), contact."""
+        out = self.kinetic_terms(s.v, s.w)
+        out.update(self.elastic_terms(s.x, s.Q))
+        out["gravity"] = self.external_energy(s.x)
+        out["contact"] = self.contact_energy(s.x)
+        return out
+
+    # -- forces ----------------------------------------------------------------------------
+    def generalized_forces(self, x, Q):
+        """Conservative node forces (n+1, 3) [N] and material torques (n, 3) [N·m]."""
+
+        def U(x, phi):
+            Qp = Q - jnp.einsum("jab,jbc->jac", skew(phi), Q)
+            return self.potential(x, Qp)
+
+        gx, gphi = jax.grad(U, argnums=(0, 1))(x, jnp.zeros((self.n, 3), x.dtype))
+        return -gx, -gphi
+
+    def contact_normal(self, x, v):
+        """Normal force per node [N] (elastic + Hunt–Crossley, ≥ 0), its damping part [N] and
+        the outward radius e_r."""
+        delta, e_r = self.penetration(x)
+        if not self.channel:
+            z = jnp.zeros_like(delta)
+            return z, z, e_r
+        pen = jnp.maximum(delta, 0.0)
+        el = self.voronoi * self.contact_stiffness * pen**1.5
+        ddot = jnp.sum(v * e_r, -1)
+        total = jnp.maximum(el * (1.0 + self.contact_damping * ddot), 0.0)
+        return total, total - el, e_r
+
+    def forces(self, x, Q, v):
+        """Everything a kick needs at (x, Q) with velocities v: node forces [N] (elastic,
+        contact, gravity, body, damping), material torques [N·m], normal forces [N] and the
+        power of the non-conservative smooth forces [W] (contact and viscous damping)."""
+        fx, tau = self.generalized_forces(x, Q)
+        N, N_damp, e_r = self.contact_normal(x, v)
+        f_damp = -N_damp[:, None] * e_r - self.damping * self.mass[:, None] * v
+        power = jnp.sum(f_damp * v)
+        return fx + f_damp, tau, N, power
+
+    # -- friction ----------------------------------------------------------------------------
+    def _contact_frames(self, x):
+        _, e_r = self.penetration(x)
+        t1 = jnp.broadcast_to(jnp.array([1.0, 0.0, 0.0], x.dtype), e_r.shape)
+        t2 = jnp.stack([jnp.zeros_like(e_r[:, 0]), -e_r[:, 2], e_r[:, 1]], -1)  # x̂ × e_r
+        T = jnp.stack([t1, t2], -2)  # (n1, 2, 3)
+        rc = 0.5 * self.rod.d * e_r
+        return T, rc
+
+    def _weights(self):
+        """c_left[i] (segment i−1) and c_right[i] (segment i): each node's share of its
+        adjacent segments' spin and of the friction torque it applies to them."""
+        n = self.n
+        left = np.r_[0.0, np.ones(n)]
+        right = np.r_[np.ones(n), 0.0]
+        count = left + right
+        return jnp.asarray(left / count), jnp.asarray(right / count)
+
+    def friction_step(self, x, v, Q, w, N, stuck, h):
+        """The friction impulses of a (half) step `h` [s], even nodes then odd nodes.
+        Returns the new (v, w, stuck)."""
+        held, _ = self.held()
+        T, rc = self._contact_frames(x)
+        cl, cr = self._weights()
+        Jinv = 1.0 / self.inertia
+        m = self.mass
+        Jlab_inv = jnp.einsum("jba,b,jbc->jac", Q, Jinv, Q)  # Qᵀ diag(1/J) Q
+        pad = jnp.zeros((1, 3, 3), x.dtype)
+        Jl = jnp.concatenate([pad, Jlab_inv], 0)  # segment i−1 of node i
+        Jr = jnp.concatenate([Jlab_inv, pad], 0)  # segment i of node i
+        Rx = skew(rc)
+        K = (jnp.eye(3, dtype=x.dtype)[None] / m[:, None, None]
+             - (cl**2)[:, None, None] * Rx @ Jl @ Rx
+             - (cr**2)[:, None, None] * Rx @ Jr @ Rx)
+        W = jnp.einsum("iab,ibc,idc->iad", T, K, T)
+        mu_s, mu_d = self.rod.mu_s, self.rod.mu_d
+        in_contact = (N > 0) & ~jnp.any(held, -1)
+        idx = jnp.arange(self.n + 1)
+        for colour in (0, 1):
+            active = in_contact & (idx % 2 == colour)
+            wlab = jnp.einsum("jba,jb->ja", Q, w)
+            zero = jnp.zeros((1, 3), x.dtype)
+            wbar = cl[:, None] * jnp.concatenate([zero, wlab], 0) + cr[:, None] * jnp.concatenate([wlab, zero], 0)
+            u = jnp.einsum("iab,ib->ia", T, v + jnp.cross(wbar, rc))
+            bound_s = mu_s * N * h
+            bound_d = mu_d * N * h
+            p, sticks = _prox(self.friction, u, W, jnp.where(stuck, bound_s, bound_d), bound_d, active)
+            P = jnp.einsum("iab,ia->ib", T, p)  # lab impulse on the node
+            v = v + P / m[:, None]
+            torque = jnp.cross(rc, P)  # lab torque impulse at the node
+            tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
+            w = w + Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg)
+            stuck = jnp.where(idx % 2 == colour, active & sticks, stuck)
+        return v, w, stuck
+
+    # -- constraints and the step limit -------------------------------------------------------
+    def constrain(self, v, w):
+        held_n, held_s = self.held()
+        v = jnp.where(held_n, self.prescribed_velocity(), v)
+        w = jnp.where(held_s[:, None], 0.0, w)
+        return v, w
+
+    def max_frequency(self, state: Rod3DState, iters: int = 80) -> Float[Array, ""]:
+        """ω_max [rad/s] of the linearised conservative dynamics at `state`, by power iteration
+        on M⁻¹H (Hessian-vector products by forward-over-reverse AD)."""
+        held_n, held_s = self.held()
+        dtype = state.x.dtype
+        free_n = jnp.where(held_n, 0.0, 1.0).astype(dtype)
+        free_s = jnp.where(jnp.broadcast_to(held_s[:, None], (self.n, 3)), 0.0, 1.0).astype(dtype)
+        mass = self.mass[:, None] * jnp.ones((1, 3), dtype)
+        inert = self.inertia[None, :] * jnp.ones((self.n, 1), dtype)
+
+        def U(x, phi):
+            Qp = state.Q - jnp.einsum("jab,jbc->jac", skew(phi), state.Q)
+            return self.potential(x, Qp)
+
+        g = jax.grad(U, argnums=(0, 1))
+        phi0 = jnp.zeros((self.n, 3), state.x.dtype)
+
+        def hvp(dx, dphi):
+            return jax.jvp(lambda a, b: g(a, b), (state.x, phi0), (dx, dphi))[1]
+
+        key = jax.random.PRNGKey(0)
+        k1, k2 = jax.random.split(key)
+        dx = free_n * jax.random.normal(k1, state.x.shape, state.x.dtype) / jnp.sqrt(mass)
+        dp = free_s * jax.random.normal(k2, phi0.shape, state.x.dtype) / jnp.sqrt(inert)
+
+        def body(_, c):
+            dx, dp, lam = c
+            hx, hp = hvp(dx, dp)
+            ax, ap = free_n * hx / mass, free_s * hp / inert  # M⁻¹ H d on the free DOFs
+            nrm = jnp.sqrt(jnp.sum(mass * ax**2) + jnp.sum(inert * ap**2))
+            cur = jnp.sqrt(jnp.sum(mass * dx**2) + jnp.sum(inert * dp**2))
+            return ax / nrm, ap / nrm, nrm / cur
+
+        dx, dp, lam = jax.lax.fori_loop(0, iters, body, (dx, dp, jnp.zeros((), state.x.dtype)))
+        return jnp.sqrt(jnp.abs(lam))
+
+    # -- states ------------------------------------------------------------------------------
+    def static_sag(self):
+        """Penetration of a rod resting on the bottom under its own weight [m]."""
+        if not (self.channel and self.gravity):
+            return 0.0 * self.rod.R
+        return (self.rod.rho * self.rod.g / self.contact_stiffness) ** (2.0 / 3.0)
+
+    def initial_state(self, F: ArrayLike = 0.0, lateral_velocity=None, lateral_offset=None) -> Rod3DState:
+        """A straight rod along x on the channel bottom (or on the x axis without a channel),
+        compressed to the uniform axial force `F` [N] (length L(1 − F/EA)), at rest except for
+        an optional lateral (y) velocity [m/s] and lateral offset [m] per node."""
+        n = self.n
+        F = _leaf(F)
+        dtype = F.dtype
+        l = self.l0 * (1.0 - F / self.rod.EA)
+        xs = jnp.arange(n + 1, dtype=dtype) * l
+        z = -(self.rod.R + self.static_sag()) if self.channel else 0.0 * self.rod.R
+        x = jnp.stack([xs, jnp.zeros_like(xs), jnp.zeros_like(xs) + z], -1)
+        if lateral_offset is not None:
+            # move along the wall: θ = offset/R on the circle of radius R + sag
+            if self.channel:
+                rr = self.rod.R + self.static_sag()
+                th = jnp.asarray(lateral_offset, dtype) / self.rod.R
+                x = x.at[:, 1].set(rr * jnp.sin(th)).at[:, 2].set(-rr * jnp.cos(th))
+            else:
+                x = x.at[:, 1].set(jnp.asarray(lateral_offset, dtype))
+        v = jnp.zeros_like(x)
+        if lateral_velocity is not None:
+            lv = jnp.asarray(lateral_velocity, dtype)
+            if self.channel:
+                _, e_r = self.penetration(x)
+                tang = jnp.stack([jnp.zeros_like(e_r[:, 0]), -e_r[:, 2], e_r[:, 1]], -1)
+                v = lv[:, None] * tang
+            else:
+                v = v.at[:, 1].set(lv)
+        # directors: d3 along each segment, d1 as close to y as possible (no twist)
+        e = x[1:] - x[:-1]
+        d3 = e / safe_norm(e)[:, None]
+        y = jnp.array([0.0, 1.0, 0.0], dtype)
+        d1 = y[None, :] - (d3 @ y)[:, None] * d3
+        d1 = d1 / safe_norm(d1)[:, None]
+        d2 = jnp.cross(d3, d1)
+        Q = jnp.stack([d1, d2, d3], -2)
+        v, w = self.constrain(v, jnp.zeros((n, 3), dtype))
+        at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
+        return Rod3DState(x, v, Q, w, at_rest, jnp.zeros((), dtype))
+
+    # -- observables -------------------------------------------------------------------------
+    def theta(self, x) -> Float[Array, " n1"]:
+        """Angle of each node from the channel bottom [rad] (as θ in the field model)."""
+        return jnp.arctan2(x[:, 1], -x[:, 2])
+
+    def axial_force(self, x, Q) -> Float[Array, " n"]:
+        """Compressive axial force of each segment, −EA σ₃ [N]."""
+        sigma, _ = self.strains(x, Q)
+        return -self.rod.EA * sigma[:, 2]
+
+
+def _prox(law, u, W, bound_stick, bound_slip, active):
+    """Per-node 2D friction impulse p for the slip velocities `u` (n1, 2) with inverse masses
+    `W` (n1, 2, 2). Coulomb: p = −W⁻¹u if |W⁻¹u| ≤ `bound_stick`, else the impulse of norm
+    `bound_slip` maximising dissipation: p = −(W + λI)⁻¹u with |p| = bound_slip. Tanh:
+    explicit smoothed impulse. Inactive nodes get p = 0. Returns (p, sticks)."""
+    if isinstance(law, Tanh):
+        un = safe_norm(u)
+        x = un / law.eps
+        small = x < 1e-4
+        xs = jnp.where(small, 1.0, x)
+        tanhc = jnp.where(small, 1.0 - x**2 / 3.0, jnp.tanh(xs) / xs)  # tanh(x)/x
+        p = -(bound_slip * tanhc / law.eps)[:, None] * u
+        return jnp.where(active[:, None], p, 0.0), jnp.zeros_like(active)
+    det = W[:, 0, 0] * W[:, 1, 1] - W[:, 0, 1] * W[:, 1, 0]
+
+    def solve(A_det, A, b):
+        return jnp.stack([A[:, 1, 1] * b[:, 0] - A[:, 0, 1] * b[:, 1], -A[:, 1, 0] * b[:, 0] + A[:, 0, 0] * b[:, 1]], -1) / A_det[:, None]
+
+    p_stick = -solve(det, W, u)
+    need = safe_norm(p_stick)
+    sticks = active & (need <= bound_stick)
+    slips = active & ~sticks & (bound_slip > 0)
+    # slip: Newton on φ(λ) = 1/|p(λ)| − 1/c (concave, increasing), from a λ₀ left of the root
+    c = jnp.where(slips, bound_slip, 1.0)
+    us = jnp.where(slips[:, None], u, jnp.array([[1.0, 0.0]], u.dtype) * 2.0 * (W[:, 0, 0] + W[:, 1, 1])[:, None])
+    trW = W[:, 0, 0] + W[:, 1, 1]
+    lam = jnp.maximum(0.0, safe_norm(us) / c - trW)
+    eye = jnp.eye(2, dtype=u.dtype)
+    for _ in range(8):
+        A = W + lam[:, None, None] * eye[None]
+        Ad = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0]
+        p = -solve(Ad, A, us)
+        pn = safe_norm(p)
+        Ainv_p = solve(Ad, A, p)
+        dphi = jnp.sum(p * Ainv_p, -1) / pn**3
+        lam = jnp.maximum(lam - (1.0 / pn - 1.0 / c) / dphi, 0.0)
+    A = W + lam[:, None, None] * eye[None]
+    p_slip = -solve(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0], A, us)
+    p = jnp.where(sticks[:, None], p_stick, jnp.where(slips[:, None], p_slip, 0.0))
+    return p, sticks

@@ -1,0 +1,131 @@
+"""The 3D discrete rod against beam theory, Euler's load, energy conservation and Coulomb's law."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod.rod3d import Rod3D, simulate_rod3d, step_limit
+from jaxrod.rod3d.so3 import exp_so3, log_so3
+
+
+def test_so3_roundtrip_and_finite_gradients_at_identity():
+    phi = jnp.array([[0.3, -0.2, 0.5], [1e-7, 0.0, -2e-7], [0.0, 0.0, 0.0]])
+    np.testing.assert_allclose(log_so3(exp_so3(phi)), phi, atol=1e-12)
+    R = exp_so3(phi)
+    np.testing.assert_allclose(jnp.einsum("iab,icb->iac", R, R), np.broadcast_to(np.eye(3), R.shape), atol=1e-13)
+    g = jax.grad(lambda p: jnp.sum(log_so3(exp_so3(p)) ** 2))(phi)
+    assert np.all(np.isfinite(g))
+    np.testing.assert_allclose(g, 2 * phi, atol=1e-9)
+
+
+def test_static_sag_of_a_simply_supported_rod_matches_beam_theory():
+    """Midspan sag 5wL⁴/(384EI) (+ shear wL²/(8κGA)) of a pinned–roller rod under its weight,
+    reached by damped dynamics."""
+    rod = jr.RodChannel.reference(0.0, L=0.3)
+    m = Rod3D(rod, 20, channel=False, control="load", damping=300.0)
+    sol = simulate_rod3d(m, m.initial_state(), 0.12, 5, save_state=True)
+    sag = -float(sol.x[-1, 10, 2])
+    theory = 5 * float(rod.w) * 0.3**4 / (384 * float(rod.EI)) + float(rod.w) * 0.3**2 / (8 * float(m.shear_coefficient * rod.GA))
+    assert abs(sag / theory - 1) < 0.01, (sag, theory)
+    # settled: the last two saves (30 ms apart) agree to 1e-3 relative
+    assert abs(float(sol.x[-2, 10, 2]) / float(sol.x[-1, 10, 2]) - 1) < 1e-3
+
+
+def test_planar_euler_load_from_the_frequency_drop():
+    """ω₁² falls linearly with the compressive dead load and vanishes at the critical load:
+    extrapolating from F = 0 and F = P_E/2 gives π²EI/L² within 1 % (no channel, no gravity)."""
+    rod = jr.RodChannel.reference(0.0, L=0.3)
+    PE = np.pi**2 * float(rod.EI) / 0.3**2
+    s = np.linspace(0.0, 1.0, 17)
+    om = []
+    for F in (0.0, 0.5 * PE):
+        m = Rod3D(rod, 16, channel=False, gravity=False, control="load", end_load=F)
+        sol = simulate_rod3d(m, m.initial_state(F, lateral_velocity=1e-4 * np.sin(np.pi * s)), 0.05, 501, save_state=True)
+        y, ts = np.asarray(sol.x[:, 8, 1]), np.asarray(sol.ts)
+        i = np.where((y[1:-1] > 0) & (y[2:] <= 0))[0][0] + 1
+        om.append(np.pi / (ts[i] + (ts[i + 1] - ts[i]) * y[i] / (y[i] - y[i + 1])))
+    om1_theory = (np.pi / 0.3) ** 2 * np.sqrt(float(rod.EI) / float(rod.rho))
+    assert abs(om[0] / om1_theory - 1) < 0.01
+    Pcr = 0.5 * PE / (1 - om[1] ** 2 / om[0] ** 2)
+    assert abs(Pcr / PE - 1) < 0.01, (Pcr, PE)
+
+
+def test_energy_is_conserved_without_friction_and_closes_with_it():
+    """μ = 0, undamped contact: E(t) − E(0) stays within 2 % of the kinetic energy put in and
+    falls at second order in dt (Verlet). With μ = 0.3 the balance E + dissipated closes as
+    tightly while friction removes most of that kinetic energy."""
+    s = np.linspace(0.0, 1.0, 31)
+    for mu in (0.0, 0.3):
+        rod = jr.RodChannel.reference(mu)
+        m = Rod3D(rod, 30)
+        s0 = m.initial_state(1.3081 + 5.0, lateral_velocity=0.035 * np.sin(6 * np.pi * s))
+        errs = []
+        for frac in (0.5, 0.25):
+            sol = simulate_rod3d(m, s0, 0.03, 7, dt_fraction=frac)
+            errs.append(np.max(np.abs(np.asarray(sol.energy_balance))))
+            assert int(sol.result) == 0
+        k0 = float(sol.energies["kinetic"][0])
+        assert errs[0] < 2e-2 * k0
+        assert errs[1] < errs[0] / 3.0, errs
+        if mu > 0:
+            assert float(sol.dissipated[-1]) > 0.1 * k0
+
+
+def test_static_friction_holds_and_dynamic_friction_sets_the_deceleration():
+    """A free rod on the bottom pushed along its axis by a body force b: below μ_s·w it does
+    not move (to elastic micro-motion, < 1e-9 m); above, it slides with (b/w − μ_d) g."""
+    rod = jr.RodChannel.reference(0.5).with_friction(0.5, 0.3)
+    w = float(rod.w)
+    for ratio in (0.4, 0.8):
+        m = Rod3D(rod, 20, ends="free", body_force=(ratio * w, 0.0, 0.0))
+        s0 = m.initial_state()
+        sol = simulate_rod3d(m, s0, 0.02, 3, save_state=True)
+        dx = np.asarray(sol.x[-1, :, 0] - s0.x[:, 0])
+        if ratio < 0.5:
+            assert np.max(np.abs(dx)) < 1e-9
+            assert bool(np.all(sol.final.stuck))
+        else:
+            expected = 0.5 * (ratio - 0.3) * 9.81 * 0.02**2
+            np.testing.assert_allclose(dx, expected, rtol=1e-4)
+
+
+def test_a_step_above_the_limit_is_refused():
+    m = Rod3D(jr.RodChannel.reference(0.3), 10)
+    s0 = m.initial_state(2.0)
+    lim = step_limit(m, s0)
+    # the limit is set by the axial wave: within 30 % of l̂/c
+    c = np.sqrt(77e9 / 6450)
+    assert 0.7 < lim / (0.3 / c) < 1.3
+    with pytest.raises(ValueError, match="dt"):
+        simulate_rod3d(m, s0, 0.001, 3, dt=1.01 * lim)
+
+
+def test_bad_arguments_name_the_argument():
+    rod = jr.RodChannel.reference(0.3)
+    with pytest.raises(ValueError, match="n_segments"):
+        Rod3D(rod, 2)
+    with pytest.raises(ValueError, match="control"):
+        Rod3D(rod, 10, control="velocity")
+    with pytest.raises(ValueError, match="rotary_scale"):
+        Rod3D(rod, 10, rotary_scale=0.5)
+
+
+@pytest.mark.parametrize("law", [jr.Coulomb(), jr.Tanh(1e-3)])
+def test_gradients_are_finite_at_zero_slip(law):
+    """d(final state)/d(perturbation amplitude) (forward mode) through a short run that starts at rest
+    (zero slip everywhere) is finite for the sharp and the smooth law."""
+    rod = jr.RodChannel.reference(0.3)
+    m = Rod3D(rod, 8, friction=law)
+    s = jnp.linspace(0.0, 1.0, 9)
+    from jaxrod.rod3d.run import _run
+
+    def f(a):
+        s0 = m.initial_state(2.0, lateral_velocity=a * jnp.sin(2 * jnp.pi * s))
+        c, obs = _run(m, s0, 2e-5, 10, 3, 0.5, False)
+        return c[0].v[4, 1] + obs["dissipated"][-1]
+
+    g0 = jax.jvp(f, (0.0,), (1.0,))[1]
+    g1 = jax.jvp(f, (0.01,), (1.0,))[1]
+    assert np.isfinite(g0) and np.isfinite(g1)
