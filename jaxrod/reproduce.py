@@ -1,6 +1,7 @@
-"""Reproduce the reference paper's experiments E2–E6 with the reduced models.
+"""Reproduce the reference paper's experiments: E2–E5 with the reduced models, E1 and the
+full-model part of E6 with the 3D rod ([`jaxrod.rod3d`][]).
 
-`jaxrod reproduce {e2,e3,e4,e5,e6,all} [--out DIR] [--quick]` writes, per experiment, PNG
+`jaxrod reproduce {e1,e2,e3,e4,e5,e6,all} [--out DIR] [--quick]` writes, per experiment, PNG
 figures laid out like a paper's panels and CSV data under `DIR/eN/`, and merges every fitted
 number into `DIR/results.json` (with the settings that made it). Critical values come from the
 boundary search ([`jaxrod.boundary`][]), not from grids; E3 is a map by definition.
@@ -21,7 +22,7 @@ from .params import RodChannel
 
 __all__ = ["reproduce", "EXPERIMENTS"]
 
-EXPERIMENTS = ("e2", "e3", "e4", "e5", "e6")
+EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "e6")
 
 
 def _plt():
@@ -51,6 +52,14 @@ def _settings(quick) -> dict:
                     map_v0=(1e-3, 0.2, 10), t1=0.3, max_dF=300.0)
     return dict(n=None, mus=np.geomspace(0.05, 1.0, 8), realizations=8, map_dF=(0.5, 64.0, 20),
                 map_v0=(1e-3, 0.2, 24), t1=0.5, max_dF=300.0)
+
+
+# -- E1 (3D rod) ---------------------------------------------------------------------------------
+
+def e1(out, quick, progress):
+    from .rod3d.experiments import e1 as run_e1
+
+    return run_e1(out, quick, progress)
 
 
 # -- E2 -----------------------------------------------------------------------------------------
@@ -297,6 +306,12 @@ def e6(out, quick, progress):
                       "energy_balance_error": float(sol.energy_balance_error())}
         for mm, a, b in zip(m, p_before, p_after):
             rows.append(dict(case=label, mode=int(mm), power_before=a, power_after=b))
+    from .rod3d.experiments import SIZES, crosscheck_critical_velocity, e6_full
+
+    res["full_model"] = e6_full(out, quick, progress)
+    S = SIZES[quick]
+    res["crosscheck_critical_velocity"] = crosscheck_critical_velocity(
+        S["dFs"], n=S["n_cross"], progress=progress)
     fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e6_spectra.png"), dpi=130)
@@ -318,7 +333,7 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, "results.json")
     results = json.load(open(path)) if os.path.exists(path) else {}
-    fns = {"e2": e2, "e3": e3, "e4": e4, "e5": e5, "e6": e6}
+    fns = {"e1": e1, "e2": e2, "e3": e3, "e4": e4, "e5": e5, "e6": e6}
     for name in names:
         sub = os.path.join(out, name)
         os.makedirs(sub, exist_ok=True)

@@ -17,10 +17,12 @@ def results(tmp_path_factory):
 
 def test_every_experiment_writes_figures_data_and_numbers(results):
     out, res = results
-    assert set(res) == {"e2", "e3", "e4", "e5", "e6"}
+    assert set(res) == {"e1", "e2", "e3", "e4", "e5", "e6"}
     assert json.loads((out / "results.json").read_text()).keys() == res.keys()
     for f in ("e2/phase.png", "e3/map.png", "e3/map.json", "e4/e4_critical_load.png", "e4/e4_critical_load.csv",
-              "e5/e5_modes.png", "e5/e5_modes.csv", "e6/e6_spectra.png", "e6/e6_spectra.csv"):
+              "e5/e5_modes.png", "e5/e5_modes.csv", "e6/e6_spectra.png", "e6/e6_spectra.csv",
+              "e1/e1_force_displacement.png", "e1/e1_force_displacement.csv", "e6/e6_full_model.png",
+              "e6/e6_full_model.csv"):
         assert (out / f).stat().st_size > 0, f
 
 
@@ -49,3 +51,20 @@ def test_buckling_modes_do_not_fall_below_the_frictionless_mode(results):
         assert e["dominant_mode_min"] >= 5, kind
     sine = next(v for k, v in res["e6"].items() if isinstance(v, dict) and k.startswith("sine"))
     assert sine["dominant_mode_after"] == 6
+
+
+def test_full_model_e1_and_e6_are_sane(results):
+    """E1: every rod buckles within the horizon, friction raises the critical force above the
+    frictionless one at every v₀, and the frictionless one is not below F⁰₆. E6 (3D rod): the
+    rod stays on the wall (no upward buckling), twist holds a small share of the energy, and
+    the energy balance closes."""
+    _, res = results
+    e1 = res["e1"]
+    f0, f3 = e1["mu=0.0"]["critical_force"], e1["mu=0.3"]["critical_force"]
+    assert all(e1["mu=0.0"]["buckled"]) and all(e1["mu=0.3"]["buckled"])
+    assert all(b > a for a, b in zip(f0, f3))
+    assert min(f0) > 0.9 * e1["F0_6_theory"]
+    e6 = res["e6"]["full_model"]
+    assert e6["max_lift_off_gap_over_R"] < 0.01
+    assert e6["twist_over_total_max"] < 0.01
+    assert e6["energy_balance_max_J"] < 1e-2 * e6["dissipated_J"]

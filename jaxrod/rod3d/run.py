@@ -35,6 +35,8 @@ class Rod3DSolution(eqx.Module):
     - `normal_force`: wall force per length at every node [N/m] (n_save, n+1);
     - `axial_force`: compressive force of every segment [N] (n_save, n);
     - `height`: largest height of the centre line above the channel bottom [m] (n_save,);
+    - `gap`: largest distance of a node inside the clearance circle, R − r [m]: > 0 where the
+      rod has lifted off the wall (buckled upward, away from it);
     - `amplitude`: max |θ| over the interior nodes [rad];
     - `buckled`, `t_buckle` [s] (`inf` if not), `result` (a `jaxrod.RESULTS` code),
       `n_steps`, `dt` [s], `final`: the final [`Rod3DState`][].
@@ -51,6 +53,7 @@ class Rod3DSolution(eqx.Module):
     normal_force: Float[Array, "n_save n1"]
     axial_force: Float[Array, "n_save n"]
     height: Float[Array, " n_save"]
+    gap: Float[Array, " n_save"]
     amplitude: Float[Array, " n_save"]
     buckled: Bool[Array, ""]
     t_buckle: Float[Array, ""]
@@ -140,15 +143,34 @@ def _observe(model, s, f, D, Wk, x0_end):
         normal_force=model.contact_normal(s.x, s.v)[0] / model.voronoi,
         axial_force=model.axial_force(s.x, s.Q),
         height=jnp.max(s.x[:, 2]) + model.rod.R + model.static_sag(),
+        gap=jnp.max(-model.penetration(s.x)[0]) if model.channel else jnp.zeros((), s.x.dtype),
         amplitude=_interior_amplitude(model, s.x),
     )
 
 
+def _all_stuck(model, s):
+    """Every free node held by static friction at the last step and at rest (a stuck rod under
+    a constant load stays stuck: nothing can release it)."""
+    held, _ = model.held()
+    free = ~jnp.any(held, -1)
+    return jnp.all(jnp.where(free, s.stuck, True)) & jnp.all(jnp.where(free[:, None], s.v == 0, True))
+
+
 @eqx.filter_jit
-def _run(model, s0, h, m: int, n_save: int, threshold: float, stop_on_buckle: bool):
+def _run(model, s0, h, m: int, n_save: int, threshold: float, stop_on_buckle: bool, stop_when_stuck: bool = False):
+    """`n_save − 1` intervals of `m` steps; a member that has buckled (with `stop_on_buckle`),
+    got stuck (with `stop_when_stuck`, constant loads only) or become non-finite is frozen,
+    and the loop over intervals ends once every member of a vmapped batch is frozen (the
+    remaining saves repeat the frozen state)."""
     cache0 = _forces(model, s0.x, s0.Q, s0.v)
     zero = jnp.zeros((), s0.x.dtype)
     x0_end = s0.x[-1, 0]
+    stuck_ok = stop_when_stuck and model.control != "displacement"
+
+    def frozen(c):
+        s, b = c[0], c[4]
+        bad = ~jnp.all(jnp.isfinite(s.x))
+        return (b & stop_on_buckle) | bad | (_all_stuck(model, s) & stuck_ok)
 
     def one_step(c):
         s, cache, D, Wk, b, tb, n = c
@@ -157,20 +179,30 @@ def _run(model, s0, h, m: int, n_save: int, threshold: float, stop_on_buckle: bo
         tb = jnp.where(nb & ~b, s.t, tb)
         return s, cache, D + dD, Wk + dW, b | nb, tb, n + 1
 
-    def interval(c, _):
-        def body(_, c):
-            stop = c[4] & stop_on_buckle
-            bad = ~jnp.all(jnp.isfinite(c[0].x))
-            return jax.lax.cond(stop | bad, lambda c: c, one_step, c)
+    def body(_, c):
+        return jax.lax.cond(frozen(c), lambda c: c, one_step, c)
 
+    first = _observe(model, s0, cache0[0], zero, zero, x0_end)
+    obs0 = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n_save,) + a.shape), first)
+    c0 = (s0, cache0, zero, zero, jnp.zeros((), bool), jnp.asarray(jnp.inf, s0.x.dtype), jnp.zeros((), jnp.int32))
+
+    def cond(carry):
+        i, c, _ = carry
+        return (i < n_save) & ~frozen(c)
+
+    def interval(carry):
+        i, c, obs = carry
         c = jax.lax.fori_loop(0, m, body, c)
         s, cache, D, Wk = c[:4]
-        return c, _observe(model, s, cache[0], D, Wk, x0_end)
+        o = _observe(model, s, cache[0], D, Wk, x0_end)
+        # write this save and repeat it into every later one (overwritten if the run goes on)
+        later = jnp.arange(n_save) >= i
+        obs = jax.tree_util.tree_map(
+            lambda a, b: jnp.where(later.reshape((-1,) + (1,) * b.ndim), b[None], a), obs, o
+        )
+        return i + 1, c, obs
 
-    c0 = (s0, cache0, zero, zero, jnp.zeros((), bool), jnp.asarray(jnp.inf, s0.x.dtype), jnp.zeros((), jnp.int32))
-    first = _observe(model, s0, cache0[0], zero, zero, x0_end)
-    c, obs = jax.lax.scan(interval, c0, None, length=n_save - 1)
-    obs = jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a[None], b], 0), first, obs)
+    _, c, obs = jax.lax.while_loop(cond, interval, (jnp.asarray(1), c0, obs0))
     return c, obs
 
 
@@ -195,6 +227,7 @@ def simulate_rod3d(
     dt_fraction: float = 0.5,
     buckle_threshold: float = 0.5,
     stop_on_buckle: bool = True,
+    stop_when_stuck: bool = False,
     save_state: bool = False,
 ) -> Rod3DSolution:
     """Integrate the 3D rod from `state0` to `t1` [s] with projected velocity Verlet.
@@ -207,6 +240,8 @@ def simulate_rod3d(
       `state0`. A `dt` at or above the limit is refused with a `ValueError`.
     - `buckle_threshold`: max |θ| [rad] past which the rod counts as buckled; with
       `stop_on_buckle` the run is frozen there (remaining saves repeat the state).
+    - `stop_when_stuck`: freeze the run once every free node is at rest and held by static
+      friction (force or dead-load control only: the state can then never change).
     - `save_state`: keep node positions at every save.
 
     **Returns:** a [`Rod3DSolution`][].
@@ -226,7 +261,7 @@ def simulate_rod3d(
             f"{limit:.4g} s (2/ω_max); use 0 < dt < {limit:.4g} s."
         )
     m, h = save_grid(t1, n_save, dt)
-    c, obs = _run(model, state0, jnp.asarray(h, state0.x.dtype), m, n_save, float(buckle_threshold), bool(stop_on_buckle))
+    c, obs = _run(model, state0, jnp.asarray(h, state0.x.dtype), m, n_save, float(buckle_threshold), bool(stop_on_buckle), bool(stop_when_stuck))
     s, _, _, _, buckled, tb, n = c
     finite = jnp.all(jnp.isfinite(s.x))
     return Rod3DSolution(
@@ -241,6 +276,7 @@ def simulate_rod3d(
         normal_force=obs["normal_force"],
         axial_force=obs["axial_force"],
         height=obs["height"],
+        gap=obs["gap"],
         amplitude=obs["amplitude"],
         buckled=buckled,
         t_buckle=tb,

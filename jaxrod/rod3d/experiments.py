@@ -1,0 +1,240 @@
+"""The reference paper's full-model experiments with the 3D rod: E1 (displacement control), the
+assumption checks of E6, and the cross-check of the critical sine velocity against the field
+model. Each returns a dict of numbers and writes PNG + CSV; `jaxrod reproduce e1|e6` calls them."""
+
+from __future__ import annotations
+
+import csv
+import os
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import theory
+from ..params import RodChannel
+from .model import Rod3D
+from .run import _run, simulate_rod3d, step_limit
+from ..integrators.base import save_grid
+
+__all__ = ["sine_velocity", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "SIZES"]
+
+SIZES = {
+    "tiny": dict(n=12, v0s=(10e-3, 30e-3), conv=(12,), t1=0.4, n_save=201, dFs=(), n_cross=12),
+    True: dict(n=40, v0s=(5e-3, 15e-3, 30e-3), conv=(20, 40, 60), t1=0.6, n_save=601, dFs=(1.0, 5.0, 20.0), n_cross=40),
+    False: dict(n=60, v0s=(5e-3, 10e-3, 15e-3, 20e-3, 25e-3, 30e-3), conv=(30, 60, 120), t1=0.8,
+                n_save=801, dFs=(1.0, 5.0, 20.0), n_cross=60),
+}
+
+
+def sine_velocity(model: Rod3D, v0, mode: int = 6):
+    """Lateral speed v₀ sin(mπs/L) at the n + 1 nodes [m/s]."""
+    s = jnp.arange(model.n + 1) / model.n
+    return jnp.asarray(v0) * jnp.sin(mode * jnp.pi * s)
+
+
+def _batched(model, states, t1, n_save, dt, threshold, stop_on_buckle=True, stop_when_stuck=False):
+    m, h = save_grid(t1, n_save, dt)
+    run = jax.vmap(lambda s0: _run(model, s0, jnp.asarray(h), m, n_save, threshold, stop_on_buckle, stop_when_stuck))
+    c, obs = run(states)
+    return c, obs, h
+
+
+def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None):
+    """Reaction force against end displacement for a rod pushed at `speed` [m/s] from rest with
+    a sine mode-6 lateral velocity of each amplitude in `v0s` [m/s] (one vmapped batch). The
+    run of a member stops once it has clearly buckled (max θ > 1 rad, past the force peak).
+
+    **Returns:** dict with `displacement` (n_save,) [m], `reaction` (B, n_save) at the pushed
+    end [N], `critical_force` (B,) the peak before buckling [N], `d_critical` [m], `buckled`.
+    """
+    rod = RodChannel.reference(mu) if rod is None else rod
+    model = Rod3D(rod, n, control="displacement", speed=speed)
+    states = jax.vmap(lambda v0: model.initial_state(0.0, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
+    dt = 0.5 * step_limit(model, jax.tree_util.tree_map(lambda a: a[0], states))
+    c, obs, h = _batched(model, states, t1, n_save, dt, 1.0)
+    ts = np.linspace(0.0, t1, n_save)
+    R = np.asarray(obs["reaction"][..., 1])
+    D = np.asarray(obs["end_displacement"])
+    buckled = np.asarray(c[4])
+    i = np.argmax(R, axis=1)
+    return dict(ts=ts, displacement=D, reaction=R, critical_force=R[np.arange(len(v0s)), i],
+                d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=h,
+                balance=np.asarray(jnp.max(jnp.abs(sum(obs["energies"].values()) + obs["dissipated"] - obs["work_in"]
+                                                   - sum(obs["energies"].values())[:, :1]), axis=1)))
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _write_csv(path, rows):
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def e1(out, quick=False, progress=True):
+    """E1: displacement control at 1 mm/s, μ = 0 and 0.3, v₀ over `SIZES`; the critical force
+    against v₀; its convergence in the segment count at μ = 0.3, v₀ = 15 mm/s."""
+    S = SIZES[quick]
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    res = {"model": "rod3d", "n_segments": S["n"], "speed_m_s": 1e-3, "v0_m_s": list(S["v0s"])}
+    rows = []
+    F0 = float(theory.frictionless_load(RodChannel.reference(0.0), 6))
+    for mu, ax in zip((0.0, 0.3), axes[:2]):
+        if progress:
+            print(f"  E1 μ = {mu}: {len(S['v0s'])} rods, {S['n']} segments", flush=True)
+        r = e1_curves(mu, S["v0s"], n=S["n"], t1=S["t1"], n_save=S["n_save"])
+        for k, v0 in enumerate(S["v0s"]):
+            ax.plot(r["displacement"][k] * 1e3, r["reaction"][k], label=f"v₀ = {v0 * 1e3:g} mm/s")
+            for d, f in zip(r["displacement"][k][::5], r["reaction"][k][::5]):
+                rows.append(dict(mu=mu, v0=v0, displacement=d, reaction=f))
+        ax.axhline(F0, color="k", lw=0.8, ls=":", label="F⁰₆ (frictionless theory)")
+        ax.set_xlabel("end displacement [mm]")
+        ax.set_ylabel("reaction at the pushed end [N]")
+        ax.set_title(f"E1: μ = {mu}, {S['n']} segments, pushed at 1 mm/s", fontsize=9)
+        ax.legend(fontsize=7)
+        res[f"mu={mu}"] = {"critical_force": r["critical_force"].tolist(),
+                           "d_critical_mm": (r["d_critical"] * 1e3).tolist(),
+                           "buckled": r["buckled"].tolist(),
+                           "energy_balance_max_J": r["balance"].tolist(),
+                           "dt": r["dt"]}
+        axes[2].plot(np.asarray(S["v0s"]) * 1e3, r["critical_force"], "o-", label=f"μ = {mu}")
+    res["F0_6_theory"] = F0
+    # convergence in n at μ = 0.3, v₀ = 15 mm/s
+    conv = []
+    for n in S["conv"]:
+        if progress:
+            print(f"  E1 convergence: {n} segments", flush=True)
+        r = e1_curves(0.3, (15e-3,), n=n, t1=S["t1"], n_save=S["n_save"])
+        conv.append(float(r["critical_force"][0]))
+    res["convergence"] = {"mu": 0.3, "v0": 15e-3, "n_segments": list(S["conv"]), "critical_force": conv}
+    axes[2].set_xlabel("v₀ [mm/s]")
+    axes[2].set_ylabel("critical force [N]")
+    axes[2].axhline(F0, color="k", lw=0.8, ls=":")
+    axes[2].set_title("critical force (peak reaction) against v₀", fontsize=9)
+    axes[2].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "e1_force_displacement.png"), dpi=130)
+    plt.close(fig)
+    _write_csv(os.path.join(out, "e1_force_displacement.csv"), rows)
+    return res
+
+
+def e6_full(out, quick=False, progress=True):
+    """E6 in the full model: μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s, ends held after pre-compression
+    (as the paper). Torsional and shear energy over the total; normal-force uniformity and
+    axial-force variation before buckling; lift-off; modal spectra before and after."""
+    from ..modal import modal_spectrum
+
+    S = SIZES[quick]
+    n = S["n"]
+    rod = RodChannel.reference(0.3)
+    F0 = float(theory.frictionless_load(rod, 6))
+    F0cr = float(theory.critical_load_continuous(rod))
+    model = Rod3D(rod, n)
+    s0 = model.initial_state(F0 + 5.0, lateral_velocity=sine_velocity(model, 35e-3))
+    if progress:
+        print(f"  E6 (full model): {n} segments, 0.1 s", flush=True)
+    sol = simulate_rod3d(model, s0, 0.1, 201, stop_on_buckle=False)
+    ts = np.asarray(sol.ts)
+    E = {k: np.asarray(v) for k, v in sol.energies.items()}
+    total = sum(E.values())
+    # "before buckling": until the amplitude passes 0.1 rad (2.4 × the stick-line amplitude A_cr)
+    amp = np.asarray(sol.amplitude)
+    i_b = int(np.argmax(amp > 0.1)) if np.any(amp > 0.1) else len(ts)
+    pre = slice(1, max(i_b, 2))
+    Nn = np.asarray(sol.normal_force)[:, 1:-1] / float(rod.w)
+    Fx = np.asarray(sol.axial_force)
+    theta = np.asarray(sol.theta)[:, 1:-1]
+    nm = min(40, n - 1)
+    p_before = np.asarray(modal_spectrum(theta[1], nm))
+    p_after = np.asarray(modal_spectrum(theta[min(i_b + 10, len(ts) - 1)], nm))
+    res = {
+        "model": "rod3d", "n_segments": n, "case": "μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s, ends held",
+        "t_amplitude_0.1rad": float(ts[i_b]) if i_b < len(ts) else None,
+        "twist_over_total_max": float(np.max(E["twist"] / total)),
+        "shear_over_total_max": float(np.max(E["shear"] / total)),
+        "normal_force_over_w_before": [float(Nn[pre].min()), float(Nn[pre].max())],
+        "axial_force_variation_before_over_F0cr": float(np.max(Fx[pre].max(1) - Fx[pre].min(1)) / F0cr),
+        "axial_force_mean_before": float(Fx[pre].mean()),
+        "max_lift_off_gap_over_R": float(np.max(np.asarray(sol.gap)) / float(rod.R)),
+        "max_theta": float(np.max(amp)),
+        "dominant_mode_before": int(np.argmax(p_before)) + 1,
+        "dominant_mode_after": int(np.argmax(p_after)) + 1,
+        "dominant_power_after": float(np.max(p_after)),
+        "energy_balance_max_J": float(np.max(np.abs(np.asarray(sol.energy_balance)))),
+        "dissipated_J": float(sol.dissipated[-1]),
+    }
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    axes[0].semilogy(ts * 1e3, E["twist"] / total, label="twist / total")
+    axes[0].semilogy(ts * 1e3, E["shear"] / total, label="shear / total")
+    axes[0].semilogy(ts * 1e3, E["bend"] / total, label="bend / total")
+    axes[0].set_xlabel("t [ms]")
+    axes[0].legend(fontsize=7)
+    axes[0].set_title("energy fractions (μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s)", fontsize=9)
+    axes[1].plot(ts[pre] * 1e3, Nn[pre].min(1), label="min N/w (interior)")
+    axes[1].plot(ts[pre] * 1e3, Nn[pre].max(1), label="max N/w")
+    axes[1].plot(ts[pre] * 1e3, (Fx[pre].max(1) - Fx[pre].min(1)) / F0cr, label="axial force range / F⁰cr")
+    axes[1].set_xlabel("t [ms] (before buckling)")
+    axes[1].legend(fontsize=7)
+    axes[1].set_title("normal and axial force before buckling", fontsize=9)
+    m = np.arange(1, nm + 1)
+    axes[2].bar(m - 0.2, p_before, width=0.4, label=f"t = {ts[1] * 1e3:.1f} ms")
+    axes[2].bar(m + 0.2, p_after, width=0.4, label=f"t = {ts[min(i_b + 10, len(ts) - 1)] * 1e3:.1f} ms")
+    axes[2].set_yscale("log")
+    axes[2].set_ylim(1e-6, 1.5)
+    axes[2].set_xlabel("mode m")
+    axes[2].legend(fontsize=7)
+    axes[2].set_title("modal power of θ, before and after buckling", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "e6_full_model.png"), dpi=130)
+    plt.close(fig)
+    rows = [dict(t=t, **{k: E[k][i] for k in E}, gap=float(sol.gap[i]), amplitude=amp[i]) for i, t in enumerate(ts)]
+    _write_csv(os.path.join(out, "e6_full_model.csv"), rows)
+    return res
+
+
+def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, progress=True):
+    """The critical sine mode-6 velocity v₀* [m/s] at each ΔF from the 3D rod under a dead load
+    F = F⁰₆ + ΔF (as the field model) and from the field model (boundary search). The 3D value
+    is bracketed by `rounds` vmapped grids of `grid` amplitudes, each zooming into the
+    bracket of the previous (buckled: θ > 0.5 rad within `t1`; runs stop when stuck).
+
+    **Returns:** list of dicts with `dF`, `field`, `rod3d`, `rod3d_bracket`.
+    """
+    from ..boundary import critical_velocity
+
+    rod = RodChannel.reference(mu)
+    F0 = float(theory.frictionless_load(rod, 6))
+    out = []
+    for dF in dFs:
+        r, _ = critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
+        v_field = float(r.root)
+        model = Rod3D(rod, n, control="load", end_load=F0 + dF)
+        lo, hi = 0.4 * v_field, 2.5 * v_field
+        for k in range(rounds):
+            v0s = np.geomspace(lo, hi, grid)
+            states = jax.vmap(lambda v0: model.initial_state(F0 + dF, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
+            dt = 0.5 * step_limit(model, jax.tree_util.tree_map(lambda a: a[0], states))
+            c, _, _ = _batched(model, states, t1, 11, dt, 0.5, True, True)
+            b = np.asarray(c[4])
+            if progress:
+                print(f"  cross-check ΔF = {dF} N, round {k}: buckled {b.astype(int).tolist()}", flush=True)
+            if b.all() or not b.any():
+                lo, hi = (lo / 3, lo) if b.all() else (hi, hi * 3)
+                continue
+            j = int(np.argmax(b))
+            lo, hi = v0s[max(j - 1, 0)], v0s[j]
+        out.append(dict(dF=dF, field=v_field, rod3d=float(np.sqrt(lo * hi)), rod3d_bracket=[float(lo), float(hi)],
+                        n_segments=n))
+    return out
