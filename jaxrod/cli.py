@@ -174,6 +174,8 @@ def _cmd_simulate(args) -> int:
     if args.model == "field" and args.n is not None and args.n < 4:
         _fail(f"argument --n: {args.n!r} is invalid: the field model needs >= 4 nodes.")
     rod = _rod_from_args(args, args.mu)
+    if args.model == "rod3d":
+        return _simulate_rod3d(args, rod)
     pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
     scene = Scene(rod, args.dF, pert, args.model, args.n, args.mode, args.dt)
     try:
@@ -219,6 +221,57 @@ def _cmd_simulate(args) -> int:
               f"{out['energy_balance_error']:.2e}, result: {out['result']}")
         if args.plot:
             print(f"  wrote {args.plot}")
+    return 0 if int(sol.result) == 0 else 1
+
+
+def _simulate_rod3d(args, rod) -> int:
+    """`jaxrod simulate --model rod3d`: the 3D rod with a sine lateral velocity perturbation."""
+    import numpy as np
+
+    from . import theory
+    from ._results import RESULTS
+    from .rod3d import Rod3D, simulate_rod3d
+    from .rod3d.experiments import sine_velocity
+
+    if args.perturbation != "sine":
+        _fail(f"argument --perturbation: {args.perturbation!r} is not available with --model rod3d; use 'sine'.")
+    if args.speed < 0:
+        _fail(f"argument --speed: {args.speed!r} is invalid: expected >= 0 m/s.")
+    n = 60 if args.n is None else args.n
+    if n < 4:
+        _fail(f"argument --n: {n!r} is invalid: the 3D rod needs >= 4 segments.")
+    F = float(theory.frictionless_load(rod, 6)) + args.dF if args.control != "displacement" else 0.0
+    model = Rod3D(rod, n, control=args.control, speed=args.speed, end_load=F if args.control == "load" else 0.0)
+    s0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
+    n_save = min(args.n_save, 1001)
+    try:
+        sol = simulate_rod3d(model, s0, args.t1, n_save, dt=args.dt,
+                             stop_on_buckle=args.control != "displacement",
+                             stop_when_stuck=args.control != "displacement")
+    except ValueError as err:
+        _fail(str(err))
+    R = np.asarray(sol.reaction[:, 1])
+    i = int(np.argmax(R))
+    out = {
+        "model": "rod3d", "control": args.control, "n_segments": n, "perturbation": "sine",
+        "amplitude": args.amplitude, "mu": args.mu, "dF": args.dF if args.control != "displacement" else None,
+        "F": F, "speed": args.speed if args.control == "displacement" else None, "dt": float(sol.dt), "t1": args.t1,
+        "buckled": bool(sol.buckled), "t_buckle": _json_number(sol.t_buckle),
+        "max_theta": float(np.max(np.asarray(sol.amplitude))),
+        "dominant_mode": int(sol.dominant_mode()[-1]),
+        "peak_reaction": float(R[i]), "end_displacement_at_peak": float(sol.end_displacement[i]),
+        "twist_over_total_max": float(np.max(np.asarray(sol.energies["twist"] / sol.total_energy))),
+        "energy_balance_error": float(np.max(np.abs(np.asarray(sol.energy_balance)))),
+        "result": RESULTS.describe(sol.result),
+    }
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"rod3d ({n} segments, {args.control} control), mu = {args.mu:g}, sine mode {args.mode} "
+              f"amplitude {args.amplitude:g} m/s: {'BUCKLED' if out['buckled'] else 'not buckled'}")
+        print(f"  max |theta| = {out['max_theta']:.4g} rad, peak reaction {out['peak_reaction']:.4g} N, "
+              f"dominant mode {out['dominant_mode']}, energy balance error {out['energy_balance_error']:.2e} J, "
+              f"result: {out['result']}")
     return 0 if int(sol.result) == 0 else 1
 
 
@@ -438,7 +491,13 @@ def build_parser() -> argparse.ArgumentParser:
     t.set_defaults(func=_cmd_theory)
 
     sm = sub.add_parser("simulate", help="simulate one perturbed rod")
-    sm.add_argument("--model", choices=["mode", "galerkin", "field"], default="field")
+    sm.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+                    help="rod3d: the full 3D rod (jaxrod.rod3d); auto: the cheapest adequate model, "
+                         "from the measured table (jaxrod.model_choice)")
+    sm.add_argument("--control", choices=["force", "load", "displacement"], default="force",
+                    help="rod3d only: ends held after pre-compression (force), dead end load (load), "
+                         "or one end pushed at --speed from zero load (displacement)")
+    sm.add_argument("--speed", type=_finite_float, default=1e-3, help="rod3d displacement control: pushing speed [m/s] (default 1e-3)")
     sm.add_argument("--dF", type=_finite_float, default=5.0, help="load above F0_m* [N] (default 5)")
     sm.add_argument("--mu", type=_finite_float, default=0.3, help="friction coefficient (default 0.3)")
     sm.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
@@ -462,7 +521,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="friction coefficient (default: 0.3 and, in the same figure, 0)")
     mp.add_argument("--dF", type=_range_spec, default="0.5:64:20", help="LO:HI:N loads above F0_6 [N] (log-spaced)")
     mp.add_argument("--v0", type=_range_spec, default="0.001:0.2:24", help="LO:HI:N sine amplitudes [m/s] (log-spaced)")
-    mp.add_argument("--model", choices=["mode", "galerkin", "field"], default="field")
+    mp.add_argument("--model", choices=["mode", "galerkin", "field", "auto"], default="field",
+                    help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
     mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
     mp.add_argument("--out", default="results/map", help="output folder (default results/map)")
@@ -472,7 +532,8 @@ def build_parser() -> argparse.ArgumentParser:
     bd = sub.add_parser("boundary", help="critical sine velocity v0*(dF) by root search")
     bd.add_argument("--mu", type=_finite_float, default=0.3)
     bd.add_argument("--dF", type=_range_spec, default="1:60:6", help="LO:HI:N loads above F0_6 [N]")
-    bd.add_argument("--model", choices=["mode", "galerkin", "field"], default="field")
+    bd.add_argument("--model", choices=["mode", "galerkin", "field", "auto"], default="field",
+                    help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     bd.add_argument("--n", type=_positive_int, default=None)
     bd.add_argument("--rtol", type=_finite_float, default=1e-6, help="relative tolerance (default 1e-6)")
     bd.add_argument("--out", default=None, help="folder for boundary.csv and boundary.png")
@@ -488,7 +549,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="m/s for velocities, N/m for random-position, m for random-shape")
     cl.add_argument("--realizations", type=_positive_int, default=1)
     cl.add_argument("--seed", type=int, default=0)
-    cl.add_argument("--model", choices=["mode", "galerkin", "field"], default="field")
+    cl.add_argument("--model", choices=["mode", "galerkin", "field", "auto"], default="field",
+                    help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     cl.add_argument("--n", type=_positive_int, default=None)
     cl.add_argument("--max-dF", dest="max_dF", type=_finite_float, default=100.0, help="bracket top [N]")
     cl.add_argument("--rtol", type=_finite_float, default=1e-6)
@@ -496,8 +558,8 @@ def build_parser() -> argparse.ArgumentParser:
     cl.add_argument("--json", action="store_true")
     cl.set_defaults(func=_cmd_critical_load)
 
-    rp = sub.add_parser("reproduce", help="reproduce the paper's experiments E2-E6 (reduced models)")
-    rp.add_argument("which", nargs="+", choices=["e2", "e3", "e4", "e5", "e6", "all"])
+    rp = sub.add_parser("reproduce", help="reproduce the paper's experiments E1-E6 (E1 and E6's full-model part with the 3D rod)")
+    rp.add_argument("which", nargs="+", choices=["e1", "e2", "e3", "e4", "e5", "e6", "all"])
     rp.add_argument("--out", default="results/paper")
     rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
     rp.add_argument("--quiet", action="store_true")
@@ -521,8 +583,30 @@ def _use_all_cpu_cores() -> None:
         os.environ["XLA_FLAGS"] = (flags + f" --xla_force_host_platform_device_count={n}").strip()
 
 
+def _resolve_auto_model(args) -> None:
+    """`--model auto`: the model and resolution of `jaxrod.model_choice.choose_model` for the
+    command's perturbation, its largest load (for critical-load: the bracket top --max-dF) and
+    its largest μ; an explicit --n is kept. Says what it chose on stderr."""
+    import numpy as np
+
+    from .model_choice import choose_model
+
+    dF = args.max_dF if args.command == "critical-load" else float(np.max(args.dF))
+    mu = 0.3 if args.mu is None else float(np.max(args.mu))  # map: μ = 0.3 (and 0) by default
+    try:
+        model, n = choose_model(getattr(args, "perturbation", "sine"), dF, mu)
+    except ValueError as err:
+        _fail(str(err))
+    args.model = model
+    args.n = n if args.n is None else args.n
+    sys.stderr.write(f"jaxrod: --model auto chose the {model} model"
+                     + (f" with n = {args.n}" if args.n is not None else "") + "\n")
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if getattr(args, "model", None) == "auto":
+        _resolve_auto_model(args)
     if args.command in ("map", "boundary", "critical-load", "reproduce"):
         _use_all_cpu_cores()
     return args.func(args)
