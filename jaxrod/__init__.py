@@ -23,6 +23,7 @@ from . import scene as scene
 from . import search as search
 from . import stability_map as stability_map
 from . import worst_case as worst_case
+from . import rod3d as rod3d
 from .sweeps import SweepResult as SweepResult
 from .sweeps import SweepSpec as SweepSpec
 from .sweeps import sweep as sweep
