@@ -46,7 +46,8 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None):
     run of a member stops once it has clearly buckled (max θ > 1 rad, past the force peak).
 
     **Returns:** dict with `displacement` (n_save,) [m], `reaction` (B, n_save) at the pushed
-    end [N], `critical_force` (B,) the peak before buckling [N], `d_critical` [m], `buckled`.
+    end [N], `critical_force` (B,) the first peak, where the linear response breaks down [N],
+    `d_critical` [m], `buckled`.
     """
     rod = RodChannel.reference(mu) if rod is None else rod
     model = Rod3D(rod, n, control="displacement", speed=speed)
@@ -57,7 +58,13 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None):
     R = np.asarray(obs["reaction"][..., 1])
     D = np.asarray(obs["end_displacement"])
     buckled = np.asarray(c[4])
-    i = np.argmax(R, axis=1)
+    # the critical force: the peak where the linear response first breaks down, i.e. the
+    # running maximum at the first save where the reaction has fallen 10 % below it (later
+    # peaks of a frictionless rod slapping in the channel are post-buckling dynamics)
+    run_max = np.maximum.accumulate(R, axis=1)
+    broke = R < 0.9 * run_max
+    first = np.where(broke.any(1), np.argmax(broke, axis=1), R.shape[1] - 1)
+    i = np.array([int(np.argmax(R[k, : first[k] + 1])) for k in range(len(v0s))])
     return dict(ts=ts, displacement=D, reaction=R, critical_force=R[np.arange(len(v0s)), i],
                 d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=h,
                 balance=np.asarray(jnp.max(jnp.abs(sum(obs["energies"].values()) + obs["dissipated"] - obs["work_in"]
@@ -222,6 +229,7 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
         v_field = float(r.root)
         model = Rod3D(rod, n, control="load", end_load=F0 + dF)
         lo, hi = 0.4 * v_field, 2.5 * v_field
+        bracketed, smallest_tested = False, None
         for k in range(rounds):
             v0s = np.geomspace(lo, hi, grid)
             states = jax.vmap(lambda v0: model.initial_state(F0 + dF, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
@@ -230,11 +238,16 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
             b = np.asarray(c[4])
             if progress:
                 print(f"  cross-check ΔF = {dF} N, round {k}: buckled {b.astype(int).tolist()}", flush=True)
+            smallest_tested = float(v0s[0]) if smallest_tested is None else min(smallest_tested, float(v0s[0]))
             if b.all() or not b.any():
-                lo, hi = (lo / 3, lo) if b.all() else (hi, hi * 3)
+                if not bracketed:
+                    lo, hi = (lo / 3, lo) if b.all() else (hi, hi * 3)
                 continue
             j = int(np.argmax(b))
             lo, hi = v0s[max(j - 1, 0)], v0s[j]
-        out.append(dict(dF=dF, field=v_field, rod3d=float(np.sqrt(lo * hi)), rod3d_bracket=[float(lo), float(hi)],
-                        n_segments=n))
+            bracketed = True
+        out.append(dict(dF=dF, field=v_field, rod3d=float(np.sqrt(lo * hi)) if bracketed else None,
+                        rod3d_bracket=[float(lo), float(hi)] if bracketed else None,
+                        every_tested_amplitude_buckled=not bracketed and bool(b.all()),
+                        smallest_tested=smallest_tested, n_segments=n))
     return out
