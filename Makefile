@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench clean
+.PHONY: demo test test-slow bench bench-quick clean
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
@@ -20,6 +20,21 @@ test: $(STAMP)
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -m slow
+
+# Every script under benchmarks/, the quick ones first; scripts added later run after these.
+BENCH_FIRST := field_throughput alternatives sweep_throughput boundary_cost field_convergence model_choice
+BENCH_SCRIPTS := $(BENCH_FIRST:%=benchmarks/%.py) \
+	$(filter-out $(BENCH_FIRST:%=benchmarks/%.py) benchmarks/_%,$(sort $(wildcard benchmarks/*.py)))
+
+bench: $(STAMP)
+	@set -e; for s in $(BENCH_SCRIPTS); do echo "== $$s"; $(BIN)/python $$s; done
+
+# The same with --quick for the scripts that take it (the others run with their defaults).
+bench-quick: $(STAMP)
+	@set -e; for s in $(BENCH_SCRIPTS); do \
+		if grep -q -- '"--quick"' $$s; then echo "== $$s --quick"; $(BIN)/python $$s --quick; \
+		else echo "== $$s"; $(BIN)/python $$s; fi; \
+	done
 
 clean:
 	rm -rf $(VENV) results/demo

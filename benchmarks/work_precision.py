@@ -1,0 +1,608 @@
+"""Work–precision diagrams: error against wall time for every way jaxrod can integrate the rod.
+
+(a) Single-mode model (P4), reference rod at ΔF = 5 N above F⁰₆, a batch of members with
+    μ spread over [0.1, 1] (λ = √|k| does not depend on μ, so every member has the same time
+    scale and the same static horizon):
+
+    - trajectory error: max over the batch and over 11 save times in [0, 5/λ] of
+      |A − A_exact|/a (a = f/|k|, the half-width of the stick line), against `jaxrod.Exact`;
+      each member starts at A = 0 with Ȧ₀ = c·Ȧ_cr, c spread over [0.3, 0.95] (slips, then
+      sticks);
+    - critical-velocity error: max over the batch of |Ȧ₀* − Ȧ_cr|/Ȧ_cr against P6, Ȧ₀* the root
+      of the indicator A(T)/a − 1 at T = 10/λ found by the package's safeguarded Newton
+      iteration (`jaxrod.boundary.safeguarded_newton`, forward-mode derivatives through the
+      integrator) from the bracket [Ȧ_cr/2.7, 3.6 Ȧ_cr].
+
+    Methods: projected Verlet (Coulomb prox), symplectic Euler with the explicit sign law,
+    the tanh law f·tanh(Ȧ/ε) through diffrax Tsit5 (explicit) and Kvaerno5 (implicit) at several
+    tolerances (`DiffraxSmooth`), an event-driven diffrax reference (Tsit5 per slip phase with a
+    root-found stop event, host-side stick test) and the exact solution. ε is given in units of
+    Ȧ_cr = λa, so ε' = ε/Ȧ_cr is the same relative smoothing for every member.
+
+(b) Field model (P1), reference rod, μ = 0.3, ΔF = 5 N, sine mode-6 lateral velocity:
+
+    - critical sine velocity v₀* found by bisection on the buckled label (runs of T1 = 0.5 s,
+      stop when buckled (max|θ| ≥ 0.5 rad) or stuck), against a converged reference
+      (projected Verlet, n = 511, dt = 0.2 of the step limit);
+    - final shape θ(s, 0.2 s) after a 20 mm/s sine perturbation (below v₀*, so the rod stays
+      straight-ish and sticks), against the same reference; n + 1 divides 512 so coarse nodes
+      coincide with reference nodes.
+
+    Methods: projected Verlet with the Coulomb law at n = 31…255 and dt = 0.8, 0.4, 0.1 of the
+    step limit 2/ω_max; explicit Verlet on the tanh law (`ProjectedVerlet(dt, Tanh(ε))`, dt
+    also bounded by ε/f, i.e. h·f/ε ≤ 1); `DiffraxSmooth` (Tsit5; Kvaerno5 for the shape only:
+    its bisection costs minutes); `SplitLinearFriction` (the creeping splitting).
+
+Times: the first call (compile + run) and the minimum over repeats of
+`jax.block_until_ready(f(x))` after it, float64, on whatever `jax.devices()[0]` is.
+
+    python benchmarks/work_precision.py [--quick] [--part single|field|both]
+
+Writes benchmarks/results/work_precision_single_mode.{csv,png} and
+work_precision_field.{csv,png} (the `--quick` run writes `*_quick.*` instead).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import os
+import time
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+import diffrax  # noqa: E402
+import equinox as eqx  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+import optimistix as optx  # noqa: E402
+
+import jaxrod as jr  # noqa: E402
+from jaxrod.boundary import safeguarded_newton, single_mode_indicator  # noqa: E402
+
+OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
+DF = 5.0  # N above F0_6
+TARGET = 1e-6  # the issue's critical-velocity target
+
+
+def device_info() -> dict:
+    d = jax.devices()[0]
+    kind = d.device_kind if d.platform != "cpu" else f"cpu ({os.cpu_count()} cores)"
+    return dict(device=kind, jax=jax.__version__, dtype="float64")
+
+
+def timed(fn, *args, repeats=3, budget=4.0):
+    """(output, first call [s], min over up to `repeats` later calls [s]); the repeats stop once
+    they have used `budget` seconds (at least one is made when `repeats` ≥ 1)."""
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - t0
+    best, spent = math.inf, 0.0
+    for i in range(repeats):
+        if i and spent > budget:
+            break
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(fn(*args))
+        dt = time.perf_counter() - t0
+        best, spent = min(best, dt), spent + dt
+    return out, first, (best if repeats else first)
+
+
+def write_csv(path, rows):
+    keys = []
+    for r in rows:
+        keys += [k for k in r if k not in keys]
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)
+    print(f"wrote {path}")
+
+
+# ---------------------------------------------------------------------------------------------
+# (a) single mode
+# ---------------------------------------------------------------------------------------------
+
+def single_mode(mu):
+    return jr.SingleMode.from_rod(jr.RodChannel.reference(mu=mu), dF=DF)
+
+
+def _event_driven(A0, v0, k, f_s, f_d, ts, rtol, atol):
+    """Event-driven reference (as tests/reference.py): Tsit5 within each slip phase, a diffrax
+    Event root-finds Ȧ = 0, the stick test and the next direction are decided on the host."""
+    A_out = np.full(ts.shape, np.nan)
+    t, A, v, T = 0.0, float(A0), float(v0), float(ts[-1])
+    while t < T:
+        if v == 0.0:
+            if abs(k * A) <= f_s:
+                A_out[ts >= t] = A
+                break
+            sigma = -np.sign(k * A)
+        else:
+            sigma = np.sign(v)
+        args = (jnp.asarray(k), jnp.asarray(float(sigma)), jnp.asarray(f_d))
+        sol = _phase(jnp.asarray(t), jnp.asarray(T), jnp.array([A, v]), args, rtol, atol)
+        t_end = float(sol.ts[-1])
+        for i in np.flatnonzero((ts >= t) & (ts <= t_end)):
+            A_out[i] = float(sol.evaluate(ts[i])[0])
+        if t_end >= T and not bool(sol.event_mask):
+            break
+        t, A, v = t_end, float(sol.ys[-1][0]), 0.0
+    return A_out
+
+
+def _rhs(t, y, args):
+    k, sigma, f_d = args
+    return jnp.stack([y[1], -k * y[0] - sigma * f_d])
+
+
+@eqx.filter_jit
+def _phase(t0, t1, y0, args, rtol, atol):
+    event = diffrax.Event(lambda t, y, args, **kw: args[1] * y[1],
+                          optx.Newton(rtol=1e-11, atol=1e-13), direction=False)
+    return diffrax.diffeqsolve(
+        diffrax.ODETerm(_rhs), diffrax.Tsit5(), t0=t0, t1=t1, dt0=t1 * 1e-3, y0=y0, args=args,
+        saveat=diffrax.SaveAt(t1=True, dense=True),
+        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
+        event=event, max_steps=1_000_000,
+    )
+
+
+def run_single_mode(quick: bool, info: dict):
+    B = 4 if quick else 8
+    mus = jnp.linspace(0.1, 1.0, B)
+    cs = jnp.linspace(0.3, 0.95, B)
+    m0 = single_mode(0.3)
+    lam = float(jnp.sqrt(-m0.k))
+    T_traj, T_root = 5.0 / lam, 10.0 / lam
+    n_save = 11
+    reps = 2 if quick else 3
+    base = dict(info, batch=B, dF=DF)
+    rows = []
+    print(f"\n(a) single mode, ΔF = {DF} N, λ = {lam:.2f} 1/s, batch {B} (μ ∈ [0.1, 1]), "
+          f"{info['dtype']}, {info['device']}, jax {info['jax']}")
+
+    # ---- exact reference trajectories
+    def traj_of(integ_of, eps_arg=False):
+        def one(mu, c, eps):
+            md = single_mode(mu)
+            vc = md.f_d / lam
+            sol = jr.simulate(md, integ_of(eps * vc), 0.0, c * vc, T_traj, n_save=n_save, throw=False)
+            return sol.q, sol.result
+        return jax.jit(jax.vmap(one, (0, 0, None)))
+
+    a = np.asarray(jax.vmap(lambda mu: single_mode(mu).f_d / (-single_mode(mu).k))(mus))
+    exact = traj_of(lambda e: jr.Exact())
+    (q_ex, res_ex), first, best = timed(exact, mus, cs, 0.0, repeats=reps)
+    q_ex = np.asarray(q_ex)
+    assert np.all(np.asarray(res_ex) == 0)
+
+    def traj_err(q):
+        return float(np.max(np.abs(np.asarray(q) - q_ex) / a[:, None]))
+
+    rows.append(dict(base, part="trajectory", method="exact", solver="closed form", param="",
+                     error=0.0, first_call_s=first, run_s=best, ok=True))
+    print(f"  exact: {best * 1e3:.3f} ms (first call {first:.2f} s)")
+
+    ldts = [0.1 / 2**i for i in (range(0, 10, 3) if quick else range(10))]
+    for name, cls in (("projected Verlet", jr.ProjectedVerlet), ("symplectic Euler (sgn)", jr.SymplecticEuler)):
+        for ldt in (ldts if name.startswith("proj") or not quick else ldts[::2]):
+            f = traj_of(lambda e, ldt=ldt, cls=cls: cls(ldt / lam))
+            (q, res), first, best = timed(f, mus, cs, 0.0, repeats=reps)
+            err = traj_err(q)
+            rows.append(dict(base, part="trajectory", method=name, solver="fixed step",
+                             param=f"lambda*dt={ldt:.3g}", lam_dt=ldt, error=err, first_call_s=first,
+                             run_s=best, ok=bool(np.all(np.asarray(res) == 0))))
+            print(f"  {name:24s} λdt={ldt:8.2e}  err={err:9.2e}  {best * 1e3:9.3f} ms")
+
+    epss = [1e-2, 1e-4] if quick else [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5]
+    rtols = [1e-6] if quick else [1e-4, 1e-6, 1e-8, 1e-10]
+    solvers = {"Tsit5": diffrax.Tsit5(), "Kvaerno5": diffrax.Kvaerno5()}
+    for sname, solver in solvers.items():
+        for rt in rtols:
+            # ε is a dynamic leaf: one compilation per (solver, rtol)
+            f = traj_of(lambda e, solver=solver, rt=rt: jr.DiffraxSmooth(
+                jr.Tanh(e), solver, rtol=rt, atol=rt * 1e-3, dt0=1e-5, max_steps=2_000_000))
+            for eps in epss:
+                (q, res), first, best = timed(f, mus, cs, eps, repeats=reps)
+                ok = bool(np.all(np.asarray(res) == 0))
+                err = traj_err(q) if ok else float("nan")
+                rows.append(dict(base, part="trajectory", method=f"tanh + {sname}", solver=sname,
+                                 param=f"eps'={eps:g}, rtol={rt:g}", eps_rel=eps, rtol=rt, error=err,
+                                 first_call_s=first, run_s=best, ok=ok))
+                print(f"  tanh {sname:8s} ε'={eps:7.0e} rtol={rt:7.0e}  err={err:9.2e}  "
+                      f"{best * 1e3:9.3f} ms{'' if ok else '  (FAILED: ' + str(np.asarray(res)) + ')'}")
+
+    ts = np.linspace(0.0, T_traj, n_save)
+    ms = [single_mode(float(mu)) for mu in np.asarray(mus)]
+    for rt in ([1e-8] if quick else [1e-6, 1e-8, 1e-10, 1e-12]):
+        def ed(rt=rt):
+            return np.stack([
+                _event_driven(0.0, float(c) * float(m.f_d) / lam, float(m.k), float(m.f_s),
+                              float(m.f_d), ts, rt, rt * 1e-3)
+                for m, c in zip(ms, np.asarray(cs))])
+        q, first, best = timed(ed, repeats=reps)
+        err = traj_err(q)
+        rows.append(dict(base, part="trajectory", method="event-driven diffrax", solver="Tsit5 + Event",
+                         param=f"rtol={rt:g}", rtol=rt, error=err, first_call_s=first, run_s=best, ok=True))
+        print(f"  event-driven rtol={rt:7.0e}  err={err:9.2e}  {best * 1e3:9.3f} ms (host loop)")
+
+    # ---- critical velocity
+    def root_of(integ_of, exact_indicator=False):
+        def one(mu, eps):
+            md = single_mode(mu)
+            a_ = md.f_d / (-md.k)
+            vc = md.f_d / lam
+
+            def g(x):
+                if exact_indicator:
+                    return single_mode_indicator(x * vc, md.k, md.f_s, md.f_d, horizon=10.0)
+                sol = jr.simulate(md, integ_of(eps * vc), 0.0, x * vc, T_root, n_save=2, throw=False)
+                return sol.q_final / a_ - 1.0
+
+            r = safeguarded_newton(g, 1 / 2.7, 3.6, rtol=1e-10, max_iter=40)
+            return r.root, r.evaluations, r.result
+        return jax.jit(jax.vmap(one, (0, None)))
+
+    def record_root(out, first, best, **kw):
+        root, ev, res = (np.asarray(x) for x in out)
+        ok = bool(np.all(res == 0))
+        err = float(np.max(np.abs(root - 1.0))) if ok else float("nan")
+        row = dict(base, part="critical_velocity", error=err, first_call_s=first, run_s=best,
+                   evaluations=float(np.mean(ev)), run_s_per_evaluation=best / float(np.mean(ev)), ok=ok, **kw)
+        rows.append(row)
+        return row
+
+    out, first, best = timed(root_of(None, exact_indicator=True), mus, 0.0, repeats=reps)
+    r = record_root(out, first, best, method="exact", solver="closed form", param="")
+    print(f"  v0*: exact  err={r['error']:.2e}  {best * 1e3:.3f} ms  ({r['evaluations']:.1f} evaluations)")
+    for ldt in ldts:
+        out, first, best = timed(root_of(lambda e, ldt=ldt: jr.ProjectedVerlet(ldt / lam)), mus, 0.0, repeats=reps)
+        r = record_root(out, first, best, method="projected Verlet", solver="fixed step",
+                        param=f"lambda*dt={ldt:.3g}", lam_dt=ldt)
+        print(f"  v0*: projected Verlet λdt={ldt:8.2e}  err={r['error']:9.2e}  {best * 1e3:9.3f} ms "
+              f"({r['evaluations']:.1f} evaluations)")
+    for sname, solver in solvers.items():
+        for rt in rtols:
+            f = root_of(lambda e, solver=solver, rt=rt: jr.DiffraxSmooth(
+                jr.Tanh(e), solver, rtol=rt, atol=rt * 1e-3, dt0=1e-5, max_steps=2_000_000,
+                adjoint=diffrax.ForwardMode()))
+            for eps in epss:
+                out, first, best = timed(f, mus, eps, repeats=reps)
+                r = record_root(out, first, best, method=f"tanh + {sname}", solver=sname,
+                                param=f"eps'={eps:g}, rtol={rt:g}", eps_rel=eps, rtol=rt)
+                print(f"  v0*: tanh {sname:8s} ε'={eps:7.0e} rtol={rt:7.0e}  err={r['error']:9.2e}  "
+                      f"{best * 1e3:9.3f} ms ({r['evaluations']:.1f} evaluations)")
+
+    summary = single_mode_summary(rows)
+    tag = "_quick" if quick else ""
+    write_csv(os.path.join(OUT, f"work_precision_single_mode{tag}.csv"), rows)
+    plot_single_mode(rows, summary, info, B, os.path.join(OUT, f"work_precision_single_mode{tag}.png"))
+    return rows, summary
+
+
+def pareto_cost_at(rs, target):
+    """Wall time at which a family of configurations reaches `target` error: log–log
+    interpolation along its Pareto front (time ascending, error descending); nan if never."""
+    pts = sorted((r["run_s"], r["error"]) for r in rs if np.isfinite(r["error"]))
+    front, best = [], math.inf
+    for t, e in pts:
+        if e < best:
+            front.append((t, e))
+            best = e
+    if not front or front[-1][1] > target:
+        return float("nan")
+    if front[0][1] <= target:
+        return front[0][0]
+    for (t1, e1), (t2, e2) in zip(front, front[1:]):
+        if e1 > target >= e2:
+            w = (math.log(e1) - math.log(target)) / (math.log(e1) - math.log(max(e2, 1e-300)))
+            return math.exp(math.log(t1) + w * (math.log(t2) - math.log(t1)))
+    return float("nan")
+
+
+def single_mode_summary(rows):
+    crit = [r for r in rows if r["part"] == "critical_velocity" and r["ok"]]
+    pv = [r for r in crit if r["method"] == "projected Verlet" and r["error"] <= TARGET]
+    th = [r for r in crit if r["method"].startswith("tanh") and r["error"] <= TARGET]
+    s = {}
+    print(f"\n  critical velocity to {TARGET:g}:")
+    if pv:
+        b = min(pv, key=lambda r: r["run_s"])
+        s["verlet"] = b
+        print(f"    cheapest projected Verlet: {b['param']}: err {b['error']:.2e}, {b['run_s'] * 1e3:.2f} ms, "
+              f"{b['run_s_per_evaluation'] * 1e3:.3f} ms/evaluation")
+    if th:
+        b = min(th, key=lambda r: r["run_s"])
+        s["tanh"] = b
+        print(f"    cheapest diffrax + tanh:   {b['method']} {b['param']}: err {b['error']:.2e}, "
+              f"{b['run_s'] * 1e3:.2f} ms, {b['run_s_per_evaluation'] * 1e3:.3f} ms/evaluation")
+    else:
+        tanh_all = [r for r in crit if r["method"].startswith("tanh")]
+        if tanh_all:
+            b = min(tanh_all, key=lambda r: r["error"])
+            s["tanh_plateau"] = b
+            print(f"    no diffrax + tanh configuration reaches {TARGET:g}; best: {b['method']} "
+                  f"{b['param']} at {b['error']:.2e}")
+    if pv and th:
+        s["ratio_solve"] = s["tanh"]["run_s"] / s["verlet"]["run_s"]
+        s["ratio_per_evaluation"] = s["tanh"]["run_s_per_evaluation"] / s["verlet"]["run_s_per_evaluation"]
+        met = s["ratio_solve"] >= 100
+        print(f"    ratio tanh/Verlet (cheapest measured configurations): {s['ratio_solve']:.1f}x per solve, "
+              f"{s['ratio_per_evaluation']:.1f}x per model evaluation -> target '>= 100x cheaper' "
+              f"{'MET' if met else 'NOT MET'}")
+    t_pv = pareto_cost_at([r for r in crit if r["method"] == "projected Verlet"], TARGET)
+    t_th = pareto_cost_at([r for r in crit if r["method"].startswith("tanh")], TARGET)
+    s["interp_verlet_s"], s["interp_tanh_s"] = t_pv, t_th
+    s["ratio_interp"] = t_th / t_pv
+    print(f"    interpolated along each Pareto front to exactly {TARGET:g}: Verlet {t_pv * 1e3:.2f} ms, "
+          f"tanh {t_th * 1e3:.2f} ms, ratio {s['ratio_interp']:.1f}x")
+    for part in ("trajectory", "critical_velocity"):
+        for fam, sel in (("projected Verlet", lambda r: r["method"] == "projected Verlet"),
+                         ("symplectic Euler", lambda r: r["method"].startswith("symplectic")),
+                         ("diffrax + tanh", lambda r: r["method"].startswith("tanh")),
+                         ("event-driven", lambda r: r["method"].startswith("event"))):
+            rs = [r for r in rows if r["part"] == part and r["ok"] and sel(r)]
+            if rs:
+                b = min(rs, key=lambda r: r["error"])
+                print(f"    {part:17s} {fam:17s} smallest error {b['error']:.2e} ({b['param']}, "
+                      f"{b['run_s'] * 1e3:.2f} ms)")
+    return s
+
+
+def plot_single_mode(rows, summary, info, B, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(14, 6))
+    colors = plt.cm.viridis(np.linspace(0, 0.9, 6))
+    for ax, part in zip(axes, ("trajectory", "critical_velocity")):
+        sel = [r for r in rows if r["part"] == part and r["ok"] and np.isfinite(r["error"])]
+        floor = 1e-17
+        groups = {}
+        for r in sel:
+            key = r["method"] if not r["method"].startswith("tanh") else f"{r['method']}, ε'={r['eps_rel']:g}"
+            groups.setdefault(key, []).append(r)
+        eps_list = sorted({r["eps_rel"] for r in sel if "eps_rel" in r}, reverse=True)
+        for key, rs in groups.items():
+            rs = sorted(rs, key=lambda r: r["run_s"])
+            t = [r["run_s"] for r in rs]
+            e = [max(r["error"], floor) for r in rs]
+            if key == "exact":
+                ax.plot(t, e, "k*", ms=14, label="exact (closed form; error = 0 drawn at 1e-17)")
+            elif key == "projected Verlet":
+                ax.plot(t, e, "o-", color="C3", lw=2.5, label=key + " (λdt = 0.1 … 2e-4)")
+            elif key.startswith("symplectic"):
+                ax.plot(t, e, "s-", color="C1", label=key + " (λdt = 0.1 … 2e-4)")
+            elif key.startswith("event"):
+                ax.plot(t, e, "D-", color="C0", label=key + " (rtol 1e-6 … 1e-12; host loop)")
+            else:
+                i = eps_list.index(rs[0]["eps_rel"]) % len(colors)
+                style = "^--" if "Tsit5" in key else "v:"
+                ax.plot(t, e, style, color=colors[i], label=key + " (rtol sweep)")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(f"wall time per batch of {B} [s] (min over repeats, after compilation)")
+        if part == "trajectory":
+            ax.set_ylabel("max |A − A_exact| / a over saves and batch")
+            ax.set_title("trajectory to t = 5/λ (slip, then stick)")
+        else:
+            ax.axhline(TARGET, color="gray", lw=1)
+            ax.set_ylabel("max |Ȧ₀* − Ȧ_cr| / Ȧ_cr (P6)")
+            ax.set_title("critical velocity (safeguarded Newton, horizon 10/λ)")
+            txt = []
+            if "ratio_solve" in summary:
+                txt.append(f"to {TARGET:g} (cheapest measured): tanh/Verlet = {summary['ratio_solve']:.0f}× per solve, "
+                           f"{summary['ratio_per_evaluation']:.0f}× per evaluation")
+            if np.isfinite(summary.get("ratio_interp", np.nan)):
+                txt.append(f"interpolated on the Pareto fronts at {TARGET:g}: {summary['ratio_interp']:.0f}×")
+            if txt:
+                ax.text(0.02, 0.02, "\n".join(txt), transform=ax.transAxes, fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6.5, loc="upper right")
+    fig.suptitle(f"single-mode model, ΔF = {DF} N — batch {B}, {info['dtype']}, {info['device']}, "
+                 f"jax {info['jax']}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    print(f"wrote {path}")
+
+
+# ---------------------------------------------------------------------------------------------
+# (b) field model
+# ---------------------------------------------------------------------------------------------
+
+ROD = None
+T1 = 0.5  # s, horizon of the buckled label (the package's boundary-search default)
+T_SHAPE = 0.2  # s
+V_SHAPE = 0.020  # m/s, sine mode-6 amplitude for the shape comparison
+BRACKET = (1e-3, 0.2)  # m/s
+
+
+def _limit(n):
+    return 2.0 / float(jr.FieldModel.from_rod(ROD, n, dF=0.0).max_frequency())
+
+
+def field_vcrit(n, integ, n_iter, repeats):
+    """v₀* [m/s] by bisection on the buckled label; nan if the lower bracket end buckles."""
+    model = jr.FieldModel.from_rod(ROD, n, dF=DF)
+    opts = jr.RunOptions(save_state=False)
+
+    def buckles(v0):
+        q0, w0 = jr.SineVelocity(v0, 6).initial_state(model)
+        return jr.simulate(model, integ, q0, w0, T1, n_save=3, options=opts, throw=False).buckled
+
+    f = jax.jit(lambda lo, hi: jr.search.bisect(buckles, lo, hi, n_iter))
+    lab = jax.jit(jax.vmap(buckles))(jnp.asarray(BRACKET))
+    (lo, hi), first, best = timed(f, *BRACKET, repeats=repeats)
+    if bool(lab[0]) or not bool(lab[1]):
+        return float("nan"), first, best, f"bracket labels {np.asarray(lab).tolist()}"
+    return float(jnp.sqrt(lo * hi)), first, best, ""
+
+
+def field_shape(n, integ, repeats):
+    model = jr.FieldModel.from_rod(ROD, n, dF=DF)
+
+    def run():
+        q0, w0 = jr.SineVelocity(V_SHAPE, 6).initial_state(model)
+        sol = jr.simulate(model, integ, q0, w0, T_SHAPE, n_save=11, throw=False,
+                          options=jr.RunOptions(save_state=False))
+        return sol.q_final, sol.result, sol.buckled
+
+    (q, res, b), first, best = timed(jax.jit(run), repeats=repeats)
+    return np.asarray(q), int(res), bool(b), first, best
+
+
+def run_field(quick: bool, info: dict):
+    global ROD
+    ROD = jr.RodChannel.reference(mu=0.3)
+    n_ref = 127 if quick else 511
+    frac_ref = 0.4 if quick else 0.2
+    n_iter = 22 if quick else 30
+    reps = 1 if quick else 2
+    f_node = float(0.3 * ROD.N / (ROD.rho * ROD.R))  # friction bound per node [rad/s²]
+    mode = jr.SingleMode.from_rod(ROD, dF=DF)
+    v_theory = float(ROD.R * jr.theory.velocity_intercept(mode.k, mode.f_d))  # m/s
+    w_scale = v_theory / float(ROD.R)  # rad/s: ε' = ε / w_scale
+    base = dict(info, batch=1, dF=DF, T1=T1)
+    print(f"\n(b) field model, ΔF = {DF} N, μ = 0.3, sine mode 6, horizon {T1} s, batch 1, "
+          f"{info['dtype']}, {info['device']}; friction bound per node f = {f_node:.1f} rad/s², "
+          f"ε' = ε/(v_cr,P6/R), v_cr,P6/R = {w_scale:.3f} rad/s")
+
+    t0 = time.perf_counter()
+    L = _limit(n_ref)
+    ref_int = jr.ProjectedVerlet(frac_ref * L)
+    v_ref, first, best, note = field_vcrit(n_ref, ref_int, n_iter, 0)
+    q_ref, _, _, _, _ = field_shape(n_ref, ref_int, 0)
+    print(f"  reference n = {n_ref}, dt = {frac_ref} of the limit: v0* = {1e3 * v_ref:.4f} mm/s "
+          f"(P6: {1e3 * v_theory:.4f}); {time.perf_counter() - t0:.1f} s")
+    rows = [dict(base, method="reference (projected Verlet, Coulomb)", law="Coulomb", n=n_ref,
+                 dt=frac_ref * L, dt_over_limit=frac_ref, v0_crit=v_ref, v0_ref=v_ref,
+                 v0_theory=v_theory, v0_rel_error=0.0, shape_rel_error=0.0, first_call_s=first,
+                 vcrit_run_s=best)]
+
+    def shape_err(q, n):
+        idx = (np.arange(1, n + 1) * (n_ref + 1)) // (n + 1) - 1
+        return float(np.max(np.abs(q - q_ref[idx])) / np.max(np.abs(q_ref)))
+
+    def one(method, law, n, integ, dt, frac, eps=None, do_vcrit=True, do_shape=True):
+        row = dict(base, method=method, law=law, n=n, dt=dt, dt_over_limit=frac)
+        if eps is not None:
+            row.update(eps=eps, eps_rel=eps / w_scale, h_f_over_eps=dt * f_node / eps)
+        if do_vcrit:
+            v, first, best, note = field_vcrit(n, integ, n_iter, reps)
+            row.update(v0_crit=v, v0_ref=v_ref, v0_theory=v_theory,
+                       v0_rel_error=abs(v / v_ref - 1) if np.isfinite(v) else float("nan"),
+                       first_call_s=first, vcrit_run_s=best, note=note)
+        if do_shape:
+            q, res, buck, first_s, best_s = field_shape(n, integ, reps)
+            row.update(shape_rel_error=shape_err(q, n) if not buck else float("nan"),
+                       shape_buckled=buck, shape_result=res, shape_first_call_s=first_s, shape_run_s=best_s)
+        rows.append(row)
+        msg = f"  {method:34s} n={n:4d} dt={dt:.2e} ({frac:.2f} lim)"
+        if eps is not None:
+            msg += f" ε'={eps / w_scale:.0e} hf/ε={dt * f_node / eps:.2f}"
+        if do_vcrit:
+            msg += (f"  v0*={1e3 * row['v0_crit']:8.4f} mm/s err={row['v0_rel_error']:8.2e} "
+                    f"[{row['vcrit_run_s']:7.3f} s]{' ' + row['note'] if row['note'] else ''}")
+        if do_shape:
+            msg += (f"  shape err={row['shape_rel_error']:8.2e}{' (buckled)' if row['shape_buckled'] else ''} "
+                    f"[{row['shape_run_s'] * 1e3:8.2f} ms]")
+        print(msg, flush=True)
+
+    ns = [31, 63] if quick else [31, 63, 127, 255]
+    fracs = [0.4] if quick else [0.8, 0.4, 0.1]
+    for n in ns:
+        for frac in fracs:
+            dt = frac * _limit(n)
+            one("projected Verlet (Coulomb)", "Coulomb", n, jr.ProjectedVerlet(dt), dt, frac)
+    tanh_ns = [31] if quick else [63, 127]
+    for n in tanh_ns:
+        for eps_rel in ([1e-1, 1e-2] if quick else [1e-1, 1e-2, 1e-3]):
+            eps = eps_rel * w_scale
+            dt = min(0.4 * _limit(n), eps / f_node)
+            one("explicit Verlet (tanh)", "tanh", n, jr.ProjectedVerlet(dt, jr.Tanh(eps)), dt,
+                dt / _limit(n), eps=eps)
+    for n in ([31] if quick else [31, 63]):
+        eps = 1e-2 * w_scale
+        integ = jr.DiffraxSmooth(jr.Tanh(eps), diffrax.Tsit5(), rtol=1e-6, atol=1e-8, max_steps=200_000)
+        one("DiffraxSmooth Tsit5 (tanh, rtol 1e-6)", "tanh", n, integ, float("nan"), float("nan"), eps=eps)
+    if not quick:
+        eps = 1e-2 * w_scale
+        integ = jr.DiffraxSmooth(jr.Tanh(eps), diffrax.Kvaerno5(), rtol=1e-6, atol=1e-8, max_steps=200_000)
+        one("DiffraxSmooth Kvaerno5 (tanh, rtol 1e-6)", "tanh", 31, integ, float("nan"), float("nan"),
+            eps=eps, do_vcrit=False)
+    for n in ([63] if quick else [63, 127]):
+        for frac in ([0.4] if quick else [0.4, 0.1]):
+            dt = frac * _limit(n)
+            one("SplitLinearFriction (Coulomb)", "Coulomb", n, jr.SplitLinearFriction(dt), dt, frac)
+    for r in rows:  # diffrax rows: dt is adaptive
+        if "h_f_over_eps" in r and not np.isfinite(r.get("dt", 0.0)):
+            r["h_f_over_eps"] = float("nan")
+
+    tag = "_quick" if quick else ""
+    write_csv(os.path.join(OUT, f"work_precision_field{tag}.csv"), rows)
+    plot_field(rows, info, n_ref, os.path.join(OUT, f"work_precision_field{tag}.png"))
+    return rows
+
+
+def plot_field(rows, info, n_ref, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(14, 6))
+    groups = {}
+    for r in rows[1:]:
+        key = r["method"] if "eps_rel" not in r else f"{r['method']}, ε'={r['eps_rel']:.0e}"
+        if r["method"].startswith("projected") or r["method"].startswith("Split"):
+            key = f"{r['method']}, dt = {r['dt_over_limit']:.1f} lim"
+        groups.setdefault(key, []).append(r)
+    markers = "os^vD<>ph*"
+    for ax, (col, tcol, title) in zip(axes, (
+            ("v0_rel_error", "vcrit_run_s", f"critical sine velocity (bisection, T1 = {T1} s)"),
+            ("shape_rel_error", "shape_run_s", f"shape θ(s, {T_SHAPE} s) after {V_SHAPE * 1e3:.0f} mm/s"))):
+        for i, (key, rs) in enumerate(groups.items()):
+            rs = [r for r in rs if col in r and np.isfinite(r.get(col, np.nan)) and r[col] > 0]
+            if not rs:
+                continue
+            rs = sorted(rs, key=lambda r: r[tcol])
+            ax.plot([r[tcol] for r in rs], [r[col] for r in rs], markers[i % len(markers)] + "-",
+                    color=f"C{i % 10}", label=key + " (n = " + ",".join(str(r["n"]) for r in rs) + ")")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time [s] (min over repeats, after compilation)")
+        ax.set_ylabel("relative error vs. reference")
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6.5)
+    fig.suptitle(f"field model, ΔF = {DF} N, μ = 0.3, reference n = {n_ref} — batch 1, "
+                 f"{info['dtype']}, {info['device']}, jax {info['jax']}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    print(f"wrote {path}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="about a minute: fewer configurations")
+    ap.add_argument("--part", default="both", choices=["single", "field", "both"])
+    args = ap.parse_args()
+    os.makedirs(OUT, exist_ok=True)
+    info = device_info()
+    t0 = time.perf_counter()
+    if args.part in ("single", "both"):
+        run_single_mode(args.quick, info)
+    if args.part in ("field", "both"):
+        run_field(args.quick, info)
+    print(f"\ntotal {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
