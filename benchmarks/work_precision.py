@@ -358,32 +358,36 @@ def plot_single_mode(rows, summary, info, B, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(14, 6))
-    colors = plt.cm.viridis(np.linspace(0, 0.9, 6))
+    fig, axes = plt.subplots(1, 2, figsize=(15, 7.5))
+    rtol_colors = {1e-4: "#9ecae1", 1e-6: "#4292c6", 1e-8: "#08519c", 1e-10: "#08306b"}
+    floor = 1e-17
     for ax, part in zip(axes, ("trajectory", "critical_velocity")):
         sel = [r for r in rows if r["part"] == part and r["ok"] and np.isfinite(r["error"])]
-        floor = 1e-17
         groups = {}
-        for r in sel:
-            key = r["method"] if not r["method"].startswith("tanh") else f"{r['method']}, ε'={r['eps_rel']:g}"
+        for r in sel:  # one curve per method; for tanh one per (solver, rtol) with ε along it
+            key = r["method"] if not r["method"].startswith("tanh") else f"{r['method']}, rtol {r['rtol']:g}"
             groups.setdefault(key, []).append(r)
-        eps_list = sorted({r["eps_rel"] for r in sel if "eps_rel" in r}, reverse=True)
         for key, rs in groups.items():
-            rs = sorted(rs, key=lambda r: r["run_s"])
+            if key.startswith("tanh"):
+                rs = sorted(rs, key=lambda r: -r["eps_rel"])
+            elif key.startswith("event"):
+                rs = sorted(rs, key=lambda r: -r["rtol"])
+            elif key != "exact":
+                rs = sorted(rs, key=lambda r: -r["lam_dt"])
             t = [r["run_s"] for r in rs]
             e = [max(r["error"], floor) for r in rs]
             if key == "exact":
-                ax.plot(t, e, "k*", ms=14, label="exact (closed form; error = 0 drawn at 1e-17)")
+                ax.plot(t, e, "k*", ms=14, label="exact (closed form; error 0 drawn at 1e-17)")
             elif key == "projected Verlet":
-                ax.plot(t, e, "o-", color="C3", lw=2.5, label=key + " (λdt = 0.1 … 2e-4)")
+                ax.plot(t, e, "o-", color="C3", lw=2.5, label=key + " (λdt = 0.1 → 2e-4)")
             elif key.startswith("symplectic"):
-                ax.plot(t, e, "s-", color="C1", label=key + " (λdt = 0.1 … 2e-4)")
+                ax.plot(t, e, "s-", color="C1", label=key + " (λdt = 0.1 → 2e-4)")
             elif key.startswith("event"):
-                ax.plot(t, e, "D-", color="C0", label=key + " (rtol 1e-6 … 1e-12; host loop)")
+                ax.plot(t, e, "D-", color="C2", label=key + " (rtol 1e-6 → 1e-12; host loop)")
             else:
-                i = eps_list.index(rs[0]["eps_rel"]) % len(colors)
                 style = "^--" if "Tsit5" in key else "v:"
-                ax.plot(t, e, style, color=colors[i], label=key + " (rtol sweep)")
+                ax.plot(t, e, style, color=rtol_colors.get(rs[0]["rtol"], "gray"), ms=5,
+                        label=key + " (ε' = 1e-1 → 1e-5)")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel(f"wall time per batch of {B} [s] (min over repeats, after compilation)")
@@ -396,18 +400,20 @@ def plot_single_mode(rows, summary, info, B, path):
             ax.set_title("critical velocity (safeguarded Newton, horizon 10/λ)")
             txt = []
             if "ratio_solve" in summary:
-                txt.append(f"to {TARGET:g} (cheapest measured): tanh/Verlet = {summary['ratio_solve']:.0f}× per solve, "
-                           f"{summary['ratio_per_evaluation']:.0f}× per evaluation")
+                txt.append(f"to {TARGET:g} (cheapest measured): tanh/Verlet = {summary['ratio_solve']:.1f}× per "
+                           f"solve, {summary['ratio_per_evaluation']:.1f}× per evaluation")
             if np.isfinite(summary.get("ratio_interp", np.nan)):
-                txt.append(f"interpolated on the Pareto fronts at {TARGET:g}: {summary['ratio_interp']:.0f}×")
+                txt.append(f"interpolated on the Pareto fronts at {TARGET:g}: {summary['ratio_interp']:.1f}×")
             if txt:
-                ax.text(0.02, 0.02, "\n".join(txt), transform=ax.transAxes, fontsize=9)
+                ax.text(0.02, 0.98, "\n".join(txt), transform=ax.transAxes, fontsize=9, va="top",
+                        bbox=dict(fc="white", ec="gray"))
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6.5, loc="upper right")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
     fig.suptitle(f"single-mode model, ΔF = {DF} N — batch {B}, {info['dtype']}, {info['device']}, "
-                 f"jax {info['jax']}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
+                 f"jax {info['jax']} (shared machine: timings are noisy, compare side by side)")
+    fig.tight_layout(rect=(0, 0.17, 1, 1))
+    fig.savefig(path, dpi=110)
     plt.close(fig)
     print(f"wrote {path}")
 
@@ -571,7 +577,7 @@ def plot_field(rows, info, n_ref, path):
             rs = [r for r in rs if col in r and np.isfinite(r.get(col, np.nan)) and r[col] > 0]
             if not rs:
                 continue
-            rs = sorted(rs, key=lambda r: r[tcol])
+            rs = sorted(rs, key=lambda r: r["n"])
             ax.plot([r[tcol] for r in rs], [r[col] for r in rs], markers[i % len(markers)] + "-",
                     color=f"C{i % 10}", label=key + " (n = " + ",".join(str(r["n"]) for r in rs) + ")")
         ax.set_xscale("log")
@@ -582,19 +588,51 @@ def plot_field(rows, info, n_ref, path):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=6.5)
     fig.suptitle(f"field model, ΔF = {DF} N, μ = 0.3, reference n = {n_ref} — batch 1, "
-                 f"{info['dtype']}, {info['device']}, jax {info['jax']}")
+                 f"{info['dtype']}, {info['device']}, jax {info['jax']} (shared machine: timings are noisy)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
     print(f"wrote {path}")
 
 
+def load_rows(path):
+    """Rows of a CSV written by this script, with numbers and booleans restored."""
+    def conv(v):
+        if v in ("True", "False"):
+            return v == "True"
+        try:
+            return float(v)
+        except ValueError:
+            return v
+
+    with open(path) as fh:
+        return [{k: conv(v) for k, v in r.items() if v != ""} for r in csv.DictReader(fh)]
+
+
+def replot(quick):
+    tag = "_quick" if quick else ""
+    p = os.path.join(OUT, f"work_precision_single_mode{tag}.csv")
+    if os.path.exists(p):
+        rows = load_rows(p)
+        info = {k: rows[0][k] for k in ("device", "jax", "dtype")}
+        plot_single_mode(rows, single_mode_summary(rows), info, int(rows[0]["batch"]), p[:-4] + ".png")
+    p = os.path.join(OUT, f"work_precision_field{tag}.csv")
+    if os.path.exists(p):
+        rows = load_rows(p)
+        info = {k: rows[0][k] for k in ("device", "jax", "dtype")}
+        plot_field(rows, info, int(rows[0]["n"]), p[:-4] + ".png")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="about a minute: fewer configurations")
     ap.add_argument("--part", default="both", choices=["single", "field", "both"])
+    ap.add_argument("--replot", action="store_true", help="redraw the figures from the CSVs, print the summary")
     args = ap.parse_args()
     os.makedirs(OUT, exist_ok=True)
+    if args.replot:
+        replot(args.quick)
+        return
     info = device_info()
     t0 = time.perf_counter()
     if args.part in ("single", "both"):
