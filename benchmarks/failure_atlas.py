@@ -210,7 +210,7 @@ def entry_creep(quick):
     still = bool(np.all(np.asarray(pv.q) == A0))
 
     # v0* against ε and horizon (bisection on the label |A(T)| > a, Kvaerno5)
-    horizons = [10.0, 30.0, 100.0] if quick else [10.0, 30.0, 100.0, 300.0]
+    horizons = [10.0, 100.0] if quick else [10.0, 30.0, 100.0, 300.0]
     vs = {}
     for H in horizons:
         T = H / lam
@@ -223,7 +223,7 @@ def entry_creep(quick):
                 sol = jr.simulate(m, integ, 0.0, x * vc, T, n_save=2, throw=False)
                 return ~(jnp.abs(sol.q_final) <= a)
 
-            lo, hi = jr.search.bisect(buckles, 1e-4, 3.6, 34 if quick else 40)
+            lo, hi = jr.search.bisect(buckles, 1e-4, 3.6, 28 if quick else 40)
             return jnp.sqrt(lo * hi)
 
         t0 = time.perf_counter()
