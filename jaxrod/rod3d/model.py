@@ -350,6 +350,8 @@ class Rod3D(eqx.Module):
     def friction_step(self, x, v, Q, w, N, stuck, h):
         """The friction impulses of a (half) step `h` [s], even nodes then odd nodes.
         Returns the new (v, w, stuck)."""
+        if not self.channel:  # no wall, no contact, no friction
+            return v, w, stuck
         held, _ = self.held()
         T, rc = self._contact_frames(x)
         cl, cr = self._weights()
