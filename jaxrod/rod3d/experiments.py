@@ -4,7 +4,6 @@ model. Each returns a dict of numbers and writes PNG + CSV; `jaxrod reproduce e1
 
 from __future__ import annotations
 
-import csv
 import os
 
 import jax
@@ -16,6 +15,7 @@ from ..params import RodChannel
 from .model import Rod3D
 from .run import _run, simulate_rod3d, step_limit
 from ..integrators.base import save_grid
+from ..reproduce import _plt, _write_csv
 
 __all__ = ["sine_velocity", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "SIZES"]
 
@@ -69,22 +69,6 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None):
                 d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=h,
                 balance=np.asarray(jnp.max(jnp.abs(sum(obs["energies"].values()) + obs["dissipated"] - obs["work_in"]
                                                    - sum(obs["energies"].values())[:, :1]), axis=1)))
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _write_csv(path, rows):
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
 
 
 def e1(out, quick=False, progress=True):

@@ -322,12 +322,11 @@ class Rod3D(eqx.Module):
     def forces(self, x, Q, v):
         """Everything a kick needs at (x, Q) with velocities v: node forces [N] (elastic,
         contact, gravity, body, damping), material torques [N·m], normal forces [N] and the
-        power of the non-conservative smooth forces [W] (contact and viscous damping)."""
+        non-conservative part of the node forces [N] (contact and viscous damping)."""
         fx, tau = self.generalized_forces(x, Q)
         N, N_damp, e_r = self.contact_normal(x, v)
         f_damp = -N_damp[:, None] * e_r - self.damping * self.mass[:, None] * v
-        power = jnp.sum(f_damp * v)
-        return fx + f_damp, tau, N, power
+        return fx + f_damp, tau, N, f_damp
 
     # -- friction ----------------------------------------------------------------------------
     def _contact_frames(self, x):

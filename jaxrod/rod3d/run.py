@@ -113,7 +113,7 @@ def _step(model: Rod3D, s: Rod3DState, cache, h):
     x = s.x + h * v1
     Q = jnp.einsum("jab,jbc->jac", exp_so3(-h * w1), s.Q)
     t = s.t + h
-    f_c, tau, N, fd = _forces(model, x, Q, v1)
+    f_c, tau, N, fd = model.forces(x, Q, v1)
     s_half = Rod3DState(x, v1, Q, w1, stuck, t)
     v_t, w_t = _kick(model, s_half, f_c, tau, half)
     v2, w2, stuck = model.friction_step(x, v_t, Q, w_t, N, stuck, half)
@@ -122,13 +122,6 @@ def _step(model: Rod3D, s: Rod3DState, cache, h):
     # work of the pushed end: support force (minus the other forces on the node) × velocity
     work = -0.5 * (f[-1, 0] + f_c[-1, 0]) * v1[-1, 0] * h if model.control == "displacement" else 0.0 * h
     return Rod3DState(x, v2, Q, w2, stuck, t), (f_c, tau, N, fd), lost, work
-
-
-def _forces(model, x, Q, v):
-    fx, tau = model.generalized_forces(x, Q)
-    N, N_damp, e_r = model.contact_normal(x, v)
-    fd = -N_damp[:, None] * e_r - model.damping * model.mass[:, None] * v
-    return fx + fd, tau, N, fd
 
 
 def _observe(model, s, f, D, Wk, x0_end):
@@ -162,7 +155,7 @@ def _run(model, s0, h, m: int, n_save: int, threshold: float, stop_on_buckle: bo
     got stuck (with `stop_when_stuck`, constant loads only) or become non-finite is frozen,
     and the loop over intervals ends once every member of a vmapped batch is frozen (the
     remaining saves repeat the frozen state)."""
-    cache0 = _forces(model, s0.x, s0.Q, s0.v)
+    cache0 = model.forces(s0.x, s0.Q, s0.v)
     zero = jnp.zeros((), s0.x.dtype)
     x0_end = s0.x[-1, 0]
     stuck_ok = stop_when_stuck and model.control != "displacement"
