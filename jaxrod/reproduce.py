@@ -1,7 +1,8 @@
 """Reproduce the reference paper's experiments: E2–E5 with the reduced models, E1 and the
-full-model part of E6 with the 3D rod ([`jaxrod.rod3d`][]).
+full-model part of E6 with the 3D rod ([`jaxrod.rod3d`][]), and the post-buckling experiment
+(`helix`: the frictionless helix against PHYSICS.md §6, a loading–unloading cycle with friction).
 
-`jaxrod reproduce {e1,e2,e3,e4,e5,e6,all} [--out DIR] [--quick]` writes, per experiment, PNG
+`jaxrod reproduce {e1,e2,e3,e4,e5,e6,helix,all} [--out DIR] [--quick]` writes, per experiment, PNG
 figures laid out like a paper's panels and CSV data under `DIR/eN/`, and merges every fitted
 number into `DIR/results.json` (with the settings that made it). Critical values come from the
 boundary search ([`jaxrod.boundary`][]), not from grids; E3 is a map by definition.
@@ -22,7 +23,7 @@ from .params import RodChannel
 
 __all__ = ["reproduce", "EXPERIMENTS"]
 
-EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "e6")
+EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "e6", "helix")
 
 
 def _plt():
@@ -320,6 +321,14 @@ def e6(out, quick, progress):
     return res
 
 
+# -- post-buckling (3D rod): helix, loading–unloading hysteresis --------------------------------
+
+def helix(out, quick, progress):
+    from .rod3d.helix import post_buckling
+
+    return post_buckling(out, quick, progress)
+
+
 def reproduce(which, out: str = "results/paper", quick=False, progress: bool = True) -> dict:
     """Run the experiments in `which` (names from `EXPERIMENTS`, or `"all"`), write figures, CSV
     and `results.json` under `out`; returns the dict written. `quick`: `False` (the full run),
@@ -332,8 +341,8 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
         raise ValueError(f"unknown experiment(s) {bad}: expected {EXPERIMENTS} or 'all'.")
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, "results.json")
-    results = json.load(open(path)) if os.path.exists(path) else {}
-    fns = {"e1": e1, "e2": e2, "e3": e3, "e4": e4, "e5": e5, "e6": e6}
+    results = {}
+    fns = {"e1": e1, "e2": e2, "e3": e3, "e4": e4, "e5": e5, "e6": e6, "helix": helix}
     for name in names:
         sub = os.path.join(out, name)
         os.makedirs(sub, exist_ok=True)
@@ -346,8 +355,14 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
         r["jax"] = jax.__version__
         r["devices"] = jax.local_device_count()
         results[name] = r
-        with open(path, "w") as fh:
-            json.dump(results, fh, indent=1, default=_json_default)
+        # merge into what is on disk now (another run may have written other experiments since)
+        on_disk = json.load(open(path)) if os.path.exists(path) else {}
+        on_disk[name] = r
+        tmp = f"{path}.{os.getpid()}.tmp"
+        with open(tmp, "w") as fh:
+            json.dump(on_disk, fh, indent=1, default=_json_default)
+        os.replace(tmp, path)
+        results = on_disk
         if progress:
             print(f"[{name}] done in {r['seconds']} s", flush=True)
     return results

@@ -17,12 +17,12 @@ def results(tmp_path_factory):
 
 def test_every_experiment_writes_figures_data_and_numbers(results):
     out, res = results
-    assert set(res) == {"e1", "e2", "e3", "e4", "e5", "e6"}
+    assert set(res) == {"e1", "e2", "e3", "e4", "e5", "e6", "helix"}
     assert json.loads((out / "results.json").read_text()).keys() == res.keys()
     for f in ("e2/phase.png", "e3/map.png", "e3/map.json", "e4/e4_critical_load.png", "e4/e4_critical_load.csv",
               "e5/e5_modes.png", "e5/e5_modes.csv", "e6/e6_spectra.png", "e6/e6_spectra.csv",
               "e1/e1_force_displacement.png", "e1/e1_force_displacement.csv", "e6/e6_full_model.png",
-              "e6/e6_full_model.csv"):
+              "e6/e6_full_model.csv", "helix/helix_post_buckling.png", "helix/helix_post_buckling.csv"):
         assert (out / f).stat().st_size > 0, f
 
 
@@ -68,3 +68,15 @@ def test_full_model_e1_and_e6_are_sane(results):
     assert e6["max_lift_off_gap_over_R"] < 0.01
     assert e6["twist_over_total_max"] < 0.01
     assert e6["energy_balance_max_J"] < 1e-2 * e6["dissipated_J"]
+
+
+def test_post_buckling_cycle_closes_its_energy_balance(results):
+    """The load–hold–unload–hold cycle: the energy balance closes over the whole path, the
+    friction cycle dissipates more than the frictionless one, and the pushed end comes back."""
+    _, res = results
+    h = res["helix"]
+    for mu in ("mu=0.0", "mu=0.3"):
+        assert h[mu]["energy_balance_max_J"] < 1e-2 * h[mu]["work_in_J"], mu
+        assert h[mu]["loop_area_J"] > 0, mu
+    assert h["mu=0.3"]["dissipated_J"] > h["mu=0.0"]["dissipated_J"]
+    assert h["theory"]["onset_chen"] < h["theory"]["onset_mitchell"]

@@ -94,7 +94,8 @@ class Rod3D(eqx.Module):
       and pushed by the constant force `end_load`, as in the reduced models) or
       `"displacement"` (node 0 held, node n pushed along −x at `speed`, E1) (static).
     - `end_load`: the dead load [N] for `control="load"`.
-    - `speed`: pushing speed [m/s] for displacement control, ≥ 0.
+    - `speed`: pushing speed [m/s] for displacement control (negative: the end is pulled back,
+      to unload).
     - `friction`: [`jaxrod.Coulomb`][] (exact set-valued law) or [`jaxrod.Tanh`][] (`eps` in m/s).
     - `contact_stiffness`: Hertz constant k [N/m^2.5] per unit length; default: the rod sinks
       1e-3·R into the wall under its own weight, k = w/(1e-3 R)^{3/2}.
@@ -112,6 +113,7 @@ class Rod3D(eqx.Module):
     ends: str = eqx.field(static=True)
     control: str = eqx.field(static=True)
     gravity: bool = eqx.field(static=True)
+    friction_sweeps: int = eqx.field(static=True)
     friction: AbstractFriction
     speed: Float[Array, ""]
     end_load: Float[Array, ""]
@@ -137,6 +139,7 @@ class Rod3D(eqx.Module):
         contact_damping: ArrayLike = 0.0,
         damping: ArrayLike = 0.0,
         rotary_scale: ArrayLike | None = None,
+        friction_sweeps: int = 1,
         body_force: ArrayLike = (0.0, 0.0, 0.0),
         gravity: bool = True,
     ):
@@ -170,7 +173,13 @@ class Rod3D(eqx.Module):
             rotary_scale = jnp.maximum(1.0, 4.0 * kappa * (rod.G / rod.E) * (l0 / rod.d) ** 2)
         self.rotary_scale = _leaf(rotary_scale)
         self.body_force = _leaf(body_force)
-        for name, lo in (("speed", 0.0), ("contact_damping", 0.0), ("damping", 0.0)):
+        if not (isinstance(friction_sweeps, int) and friction_sweeps >= 1):
+            raise ValueError(f"Rod3D.friction_sweeps = {friction_sweeps!r} is invalid: expected an int >= 1.")
+        self.friction_sweeps = friction_sweeps
+        v = _concrete(self.speed)
+        if v is not None and not np.all(np.isfinite(v)):
+            raise ValueError(f"Rod3D.speed = {v!r} m/s is invalid: it must be finite.")
+        for name, lo in (("contact_damping", 0.0), ("damping", 0.0)):
             v = _concrete(getattr(self, name))
             if v is not None and not (np.all(np.isfinite(v)) and np.all(v >= lo)):
                 raise ValueError(f"Rod3D.{name} = {v!r} is invalid: it must be finite and >= {lo}.")
@@ -368,21 +377,27 @@ class Rod3D(eqx.Module):
         mu_s, mu_d = self.rod.mu_s, self.rod.mu_d
         in_contact = (N > 0) & ~jnp.any(held, -1)
         idx = jnp.arange(self.n + 1)
-        for colour in (0, 1):
-            active = in_contact & (idx % 2 == colour)
-            wlab = jnp.einsum("jba,jb->ja", Q, w)
-            zero = jnp.zeros((1, 3), x.dtype)
-            wbar = cl[:, None] * jnp.concatenate([zero, wlab], 0) + cr[:, None] * jnp.concatenate([wlab, zero], 0)
-            u = jnp.einsum("iab,ib->ia", T, v + jnp.cross(wbar, rc))
-            bound_s = mu_s * N * h
-            bound_d = mu_d * N * h
-            p, sticks = _prox(self.friction, u, W, jnp.where(stuck, bound_s, bound_d), bound_d, active)
-            P = jnp.einsum("iab,ia->ib", T, p)  # lab impulse on the node
-            v = v + P / m[:, None]
-            torque = jnp.cross(rc, P)  # lab torque impulse at the node
-            tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
-            w = w + Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg)
-            stuck = jnp.where(idx % 2 == colour, active & sticks, stuck)
+        p_acc = jnp.zeros((self.n + 1, 2), x.dtype)  # each node's impulse so far (this half step)
+        for _ in range(self.friction_sweeps):
+            for colour in (0, 1):
+                active = in_contact & (idx % 2 == colour)
+                wlab = jnp.einsum("jba,jb->ja", Q, w)
+                zero = jnp.zeros((1, 3), x.dtype)
+                wbar = cl[:, None] * jnp.concatenate([zero, wlab], 0) + cr[:, None] * jnp.concatenate([wlab, zero], 0)
+                u = jnp.einsum("iab,ib->ia", T, v + jnp.cross(wbar, rc))
+                u = u - jnp.einsum("iab,ib->ia", W, p_acc)  # without the node's own impulse
+                bound_s = mu_s * N * h
+                bound_d = mu_d * N * h
+                p, sticks = _prox(self.friction, u, W, jnp.where(stuck, bound_s, bound_d), bound_d, active)
+                mine = (idx % 2 == colour)[:, None]
+                dp = jnp.where(mine, p - p_acc, 0.0)
+                p_acc = jnp.where(mine, p, p_acc)
+                P = jnp.einsum("iab,ia->ib", T, dp)  # lab impulse on the node
+                v = v + P / m[:, None]
+                torque = jnp.cross(rc, P)  # lab torque impulse at the node
+                tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
+                w = w + Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg)
+                stuck = jnp.where(idx % 2 == colour, active & sticks, stuck)
         return v, w, stuck
 
     # -- constraints and the step limit -------------------------------------------------------
