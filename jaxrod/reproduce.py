@@ -311,8 +311,12 @@ def e6(out, quick, progress):
 
     res["full_model"] = e6_full(out, quick, progress)
     S = SIZES[quick]
+    # friction at the contact point (the model) and at the centre line (sliding only, no
+    # rolling: the reduced models' assumption), to separate rolling from everything else
     res["crosscheck_critical_velocity"] = crosscheck_critical_velocity(
         S["dFs"], n=S["n_cross"], progress=progress)
+    res["crosscheck_critical_velocity_axis_friction"] = crosscheck_critical_velocity(
+        S["dFs"], n=S["n_cross"], progress=progress, friction_at="axis")
     fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e6_spectra.png"), dpi=130)

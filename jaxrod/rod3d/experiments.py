@@ -40,10 +40,11 @@ def _batched(model, states, t1, n_save, dt, threshold, stop_on_buckle=True, stop
     return c, obs, h
 
 
-def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None):
+def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fraction=0.5):
     """Reaction force against end displacement for a rod pushed at `speed` [m/s] from rest with
     a sine mode-6 lateral velocity of each amplitude in `v0s` [m/s] (one vmapped batch). The
     run of a member stops once it has clearly buckled (max θ > 1 rad, past the force peak).
+    The step is `dt_fraction` × the explicit limit 2/ω_max at the initial state.
 
     **Returns:** dict with `displacement` (n_save,) [m], `reaction` (B, n_save) at the pushed
     end [N], `critical_force` (B,) the first peak, where the linear response breaks down [N],
@@ -52,7 +53,7 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None):
     rod = RodChannel.reference(mu) if rod is None else rod
     model = Rod3D(rod, n, control="displacement", speed=speed)
     states = jax.vmap(lambda v0: model.initial_state(0.0, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
-    dt = 0.5 * step_limit(model, jax.tree_util.tree_map(lambda a: a[0], states))
+    dt = dt_fraction * step_limit(model, jax.tree_util.tree_map(lambda a: a[0], states))
     c, obs, h = _batched(model, states, t1, n_save, dt, 1.0)
     ts = np.linspace(0.0, t1, n_save)
     R = np.asarray(obs["reaction"][..., 1])
@@ -195,13 +196,17 @@ def e6_full(out, quick=False, progress=True):
     return res
 
 
-def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, progress=True):
+def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, progress=True, friction_at="surface"):
     """The critical sine mode-6 velocity v₀* [m/s] at each ΔF from the 3D rod under a dead load
     F = F⁰₆ + ΔF (as the field model) and from the field model (boundary search). The 3D value
     is bracketed by `rounds` vmapped grids of `grid` amplitudes, each zooming into the
-    bracket of the previous (buckled: θ > 0.5 rad within `t1`; runs stop when stuck).
+    bracket of the previous (buckled: θ > 0.5 rad within `t1`; runs stop when stuck). The
+    bracket is [largest stable, next amplitude] (every tested amplitude above it buckled);
+    outcomes that are not monotonic in v₀ (a buckled amplitude below a stable one) are
+    reported, with the smallest buckled amplitude. `friction_at` is passed to [`Rod3D`][].
 
-    **Returns:** list of dicts with `dF`, `field`, `rod3d`, `rod3d_bracket`.
+    **Returns:** list of dicts with `dF`, `field`, `rod3d`, `rod3d_bracket`, `monotonic`,
+    `smallest_buckled`, `smallest_tested`, `every_tested_amplitude_buckled`.
     """
     from ..boundary import critical_velocity
 
@@ -211,27 +216,38 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
     for dF in dFs:
         r, _ = critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
         v_field = float(r.root)
-        model = Rod3D(rod, n, control="load", end_load=F0 + dF)
+        model = Rod3D(rod, n, control="load", end_load=F0 + dF, friction_at=friction_at)
         lo, hi = 0.4 * v_field, 2.5 * v_field
-        bracketed, smallest_tested = False, None
+        bracketed, monotonic, tested = False, True, {}
         for k in range(rounds):
             v0s = np.geomspace(lo, hi, grid)
             states = jax.vmap(lambda v0: model.initial_state(F0 + dF, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
             dt = 0.5 * step_limit(model, jax.tree_util.tree_map(lambda a: a[0], states))
             c, _, _ = _batched(model, states, t1, 11, dt, 0.5, True, True)
             b = np.asarray(c[4])
+            tested.update(zip(v0s.tolist(), b.tolist()))
             if progress:
-                print(f"  cross-check ΔF = {dF} N, round {k}: buckled {b.astype(int).tolist()}", flush=True)
-            smallest_tested = float(v0s[0]) if smallest_tested is None else min(smallest_tested, float(v0s[0]))
-            if b.all() or not b.any():
-                if not bracketed:
-                    lo, hi = (lo / 3, lo) if b.all() else (hi, hi * 3)
+                print(f"  cross-check ΔF = {dF} N ({friction_at}), round {k}: buckled {b.astype(int).tolist()}", flush=True)
+            monotonic &= bool(np.all(np.diff(b.astype(int)) >= 0))
+            if not b.any():
+                lo, hi = (hi, hi * 3) if not bracketed else (lo, hi)
                 continue
-            j = int(np.argmax(b))
-            lo, hi = v0s[max(j - 1, 0)], v0s[j]
+            stable = np.flatnonzero(~b)
+            if stable.size == 0:  # every amplitude buckled
+                if not bracketed:
+                    lo, hi = lo / 3, lo
+                continue
+            j = int(stable[-1])
+            if j == grid - 1:
+                continue  # a stable member at the top: the bracket lies above (non-monotonic grid)
+            lo, hi = v0s[j], v0s[j + 1]
             bracketed = True
+        vs = np.array(sorted(tested))
+        bs = np.array([tested[v] for v in vs])
         out.append(dict(dF=dF, field=v_field, rod3d=float(np.sqrt(lo * hi)) if bracketed else None,
                         rod3d_bracket=[float(lo), float(hi)] if bracketed else None,
-                        every_tested_amplitude_buckled=not bracketed and bool(b.all()),
-                        smallest_tested=smallest_tested, n_segments=n))
+                        monotonic=bool(monotonic and np.all(np.diff(bs.astype(int)) >= 0)),
+                        smallest_buckled=float(vs[bs][0]) if bs.any() else None,
+                        every_tested_amplitude_buckled=bool(bs.all()),
+                        smallest_tested=float(vs[0]), n_segments=n, friction_at=friction_at))
     return out

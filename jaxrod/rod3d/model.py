@@ -103,6 +103,11 @@ class Rod3D(eqx.Module):
     - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (for
       quasi-static tests; 0 by default).
     - `rotary_scale`: α ≥ 1 on the transverse rotary inertia (default: see module docstring).
+    - `friction_sweeps`: projected Gauss–Seidel sweeps of the red–black friction pass per half
+      step (static, default 1); more sweeps converge the coupled impulses of neighbouring nodes.
+    - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
+      twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
+      models assume) (static).
     - `body_force`: extra force per length [N/m], a 3-vector (default 0).
     - `gravity`: include gravity (static, default True).
     """
@@ -114,6 +119,7 @@ class Rod3D(eqx.Module):
     control: str = eqx.field(static=True)
     gravity: bool = eqx.field(static=True)
     friction_sweeps: int = eqx.field(static=True)
+    friction_at: str = eqx.field(static=True)
     friction: AbstractFriction
     speed: Float[Array, ""]
     end_load: Float[Array, ""]
@@ -140,6 +146,7 @@ class Rod3D(eqx.Module):
         damping: ArrayLike = 0.0,
         rotary_scale: ArrayLike | None = None,
         friction_sweeps: int = 1,
+        friction_at: str = "surface",
         body_force: ArrayLike = (0.0, 0.0, 0.0),
         gravity: bool = True,
     ):
@@ -176,6 +183,9 @@ class Rod3D(eqx.Module):
         if not (isinstance(friction_sweeps, int) and friction_sweeps >= 1):
             raise ValueError(f"Rod3D.friction_sweeps = {friction_sweeps!r} is invalid: expected an int >= 1.")
         self.friction_sweeps = friction_sweeps
+        if friction_at not in ("surface", "axis"):
+            raise ValueError(f"Rod3D.friction_at = {friction_at!r} is invalid: expected 'surface' or 'axis'.")
+        self.friction_at = friction_at
         v = _concrete(self.speed)
         if v is not None and not np.all(np.isfinite(v)):
             raise ValueError(f"Rod3D.speed = {v!r} m/s is invalid: it must be finite.")
@@ -343,7 +353,7 @@ class Rod3D(eqx.Module):
         t1 = jnp.broadcast_to(jnp.array([1.0, 0.0, 0.0], x.dtype), e_r.shape)
         t2 = jnp.stack([jnp.zeros_like(e_r[:, 0]), -e_r[:, 2], e_r[:, 1]], -1)  # x̂ × e_r
         T = jnp.stack([t1, t2], -2)  # (n1, 2, 3)
-        rc = 0.5 * self.rod.d * e_r
+        rc = (0.5 * self.rod.d if self.friction_at == "surface" else 0.0) * e_r
         return T, rc
 
     def _weights(self):

@@ -87,18 +87,51 @@ if "e6" in r and "full_model" in r["e6"]:
     rows.append(("E6 full model: dominant mode before → after buckling (power share)", "one mode dominates",
                  f"{f['dominant_mode_before']} → {f['dominant_mode_after']} ({f['dominant_power_after']:.2f})",
                  "rod3d", "jaxrod reproduce e6"))
-    for c in r["e6"].get("crosscheck_critical_velocity", []):
-        if c.get("rod3d") is None:
-            rows.append((f"critical sine velocity v₀*, μ = 0.3, ΔF = {c['dF']:g} N: field vs 3D rod (dead load)",
-                         "models agree", f"{c['field'] * 1e3:.2f} vs < {c['smallest_tested'] * 1e3:.2f} mm/s "
-                         "(every amplitude tested buckled the 3D rod)", f"field / rod3d, {c['n_segments']} segments",
-                         "jaxrod reproduce e6"))
-            continue
-        rows.append((f"critical sine velocity v₀*, μ = 0.3, ΔF = {c['dF']:g} N: field vs 3D rod (dead load)",
-                     "models agree", f"{c['field'] * 1e3:.2f} vs {c['rod3d'] * 1e3:.2f} mm/s "
-                     f"({100 * (c['rod3d'] / c['field'] - 1):+.1f} %; 3D bracket {c['rod3d_bracket'][0] * 1e3:.2f}–"
-                     f"{c['rod3d_bracket'][1] * 1e3:.2f})", f"field / rod3d, {c['n_segments']} segments",
-                     "jaxrod reproduce e6"))
+    for key, where in (("crosscheck_critical_velocity", "friction at the contact point"),
+                       ("crosscheck_critical_velocity_axis_friction", "friction at the centre line, no rolling")):
+        for c in r["e6"].get(key, []):
+            label = f"critical sine velocity v₀*, μ = 0.3, ΔF = {c['dF']:g} N: field vs 3D rod (dead load; {where})"
+            model = f"field / rod3d, {c['n_segments']} segments"
+            if c.get("rod3d") is None:
+                rows.append((label, "models agree", f"{c['field'] * 1e3:.2f} vs < {c['smallest_tested'] * 1e3:.2f} mm/s "
+                             "(every amplitude tested buckled the 3D rod)", model, "jaxrod reproduce e6"))
+                continue
+            extra = ("" if c.get("monotonic", True) else
+                     f"; not monotonic in v₀: also buckled at {c['smallest_buckled'] * 1e3:.2f} mm/s")
+            rows.append((label, "models agree", f"{c['field'] * 1e3:.2f} vs {c['rod3d'] * 1e3:.2f} mm/s "
+                         f"({100 * (c['rod3d'] / c['field'] - 1):+.1f} %; 3D bracket {c['rod3d_bracket'][0] * 1e3:.2f}–"
+                         f"{c['rod3d_bracket'][1] * 1e3:.2f}{extra})", model, "jaxrod reproduce e6"))
+if "helix" in r:
+    h = r["helix"]
+    th = h["theory"]
+    for mu in ("0.0", "0.3"):
+        e = h[f"mu={mu}"]
+        if "over_the_top" in e:
+            o = e["over_the_top"]
+            rows.append((f"post-buckling, μ = {mu}: end load when the rod first goes over the top of the channel",
+                         f"helical onset between {th['onset_chen']:.2f} (Chen) and {th['onset_mitchell']:.2f} N (Mitchell)",
+                         f"{o['reaction_save_before_N']:.2f}–{o['reaction_N']:.2f} N",
+                         f"rod3d, {h['n_segments']} segments, pushed at {h['speed_m_s'] * 1e3:g} mm/s", "jaxrod reproduce helix"))
+    e = h["mu=0.0"]
+    if "helical_saves_loading" in e:
+        g = e["helical_saves_loading"]
+        rows.append(("post-buckling, μ = 0: axial force / Lubinski's 2EIβ² over the helical states of the loading "
+                     "(median, min, max)", "1 (p = π√(8EI/F))", ", ".join(f"{v:.2f}" for v in g["F_over_lubinski_median_min_max"]),
+                     f"rod3d, {g['count']} saves", "jaxrod reproduce helix"))
+        rows.append(("post-buckling, μ = 0: wall force − w cos θ / helix equilibrium Rβ²(F − EIβ²) (median, min, max)",
+                     "1 (= RF²/4EI at Lubinski's pitch, Mitchell)",
+                     ", ".join(f"{v:.2f}" for v in g["N_over_equilibrium_median_min_max"]), "rod3d", "jaxrod reproduce helix"))
+    if "helix_at_d_max" in e:
+        x = e["helix_at_d_max"]
+        rows.append(("post-buckling, μ = 0, held at the largest displacement: pitch; wall force − w cos θ",
+                     f"Lubinski {x['pitch_lubinski_m']:.3f} m; Mitchell RF²/4EI = {x['mitchell_RF2_4EI_N_m']:.2f} N/m "
+                     f"(+ w: {x['mitchell_plus_w_N_m']:.2f})",
+                     f"{x['pitch_m']:.3f} m; {x['N_minus_gravity_N_m']:.2f} N/m (equilibrium at the measured pitch "
+                     f"{x['N_equilibrium_N_m']:.2f}) at F = {x['axial_force_N']:.2f} N", "rod3d", "jaxrod reproduce helix"))
+    rows.append(("post-buckling: loop area ∮F dd of the load–unload cycle, μ = 0 / μ = 0.3", "larger with friction",
+                 f"{h['mu=0.0']['loop_area_J'] * 1e3:.2f} / {h['mu=0.3']['loop_area_J'] * 1e3:.2f} mJ; residual max abs θ "
+                 f"after unloading {h['mu=0.0']['max_abs_theta_after_unloading']:.1e} / "
+                 f"{h['mu=0.3']['max_abs_theta_after_unloading']:.3f} rad", "rod3d", "jaxrod reproduce helix"))
 if "e6" in r:
     for k, v in r["e6"].items():
         if isinstance(v, dict) and k != "full_model":
