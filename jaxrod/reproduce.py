@@ -307,7 +307,7 @@ def e6(out, quick, progress):
                       "energy_balance_error": float(sol.energy_balance_error())}
         for mm, a, b in zip(m, p_before, p_after):
             rows.append(dict(case=label, mode=int(mm), power_before=a, power_after=b))
-    from .rod3d.experiments import SIZES, crosscheck_critical_velocity, e6_full
+    from .rod3d.experiments import SIZES, crosscheck_critical_velocity, e6_full, rolling_check
 
     res["full_model"] = e6_full(out, quick, progress)
     S = SIZES[quick]
@@ -317,6 +317,10 @@ def e6(out, quick, progress):
         S["dFs"], n=S["n_cross"], progress=progress)
     res["crosscheck_critical_velocity_axis_friction"] = crosscheck_critical_velocity(
         S["dFs"], n=S["n_cross"], progress=progress, friction_at="axis")
+    if S["dFs"]:
+        if progress:
+            print("  rolling check: a rod the field model calls stuck, friction at the surface and the axis", flush=True)
+        res["rolling_check"] = rolling_check(max(S["dFs"]), n=S["n_cross"])
     fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e6_spectra.png"), dpi=130)

@@ -35,6 +35,7 @@ from .integrators.base import RunOptions
 from .modal import dominant_mode
 from .params import RodChannel
 from .scene import MODELS, PERTURBATIONS, Scene, default_nodes, make_perturbation
+from . import theory
 from .simulate import simulate
 
 __all__ = ["SweepSpec", "SweepResult", "sweep", "PARAMETERS", "wilson_interval"]
@@ -42,6 +43,7 @@ __all__ = ["SweepSpec", "SweepResult", "sweep", "PARAMETERS", "wilson_interval"]
 ROD_FIELDS = ("L", "d", "E", "rho_v", "nu", "R", "g", "mu_s", "mu_d")
 PARAMETERS = ("dF", "amplitude", "mu", "realization") + ROD_FIELDS
 _STIFFNESS_FIELDS = ("L", "d", "E", "rho_v", "R", "g")  # set the step limit
+ROD3D_SEGMENTS = 60  # as E1 and E6 (README: the full model)
 OUTPUTS = ("buckled", "t_buckle", "dominant_mode", "max_theta", "final_theta", "stuck", "t_stop", "result")
 
 
@@ -49,9 +51,12 @@ OUTPUTS = ("buckled", "t_buckle", "dominant_mode", "max_theta", "final_theta", "
 class SweepSpec:
     """Everything about a sweep except the swept values (all plain, JSON-serialisable).
 
-    - `model`: "mode", "galerkin" or "field".
+    - `model`: "mode", "galerkin", "field" or "rod3d" (the full 3D rod, [`jaxrod.rod3d.Rod3D`][],
+      under the dead load F⁰_m* + ΔF with friction at the contact point; `n` segments, default
+      60; dt 0.5 of its explicit limit; `threshold` on max|θ| as for the other models).
     - `perturbation`: "sine", "random-velocity", "random-position" or "random-shape"
-      (amplitude units as in [`jaxrod.scene.make_perturbation`][]).
+      (amplitude units as in [`jaxrod.scene.make_perturbation`][]; "random-position", a
+      timed force pulse, is not available with "rod3d").
     - `mu`: friction coefficient (μ_s = μ_d) unless swept; `dF` [N], `amplitude` defaults.
     - `mode`: sine / single mode number; `n`: nodes or modes (`None`: the default for the
       largest load of the sweep); `dt` [s] (`None`: 0.4 of the step limit of the stiffest
@@ -73,8 +78,13 @@ class SweepSpec:
     rod: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
-        if self.model not in MODELS:
-            raise ValueError(f"SweepSpec.model = {self.model!r} is invalid: expected one of {MODELS}.")
+        if self.model not in MODELS + ("rod3d",):
+            raise ValueError(f"SweepSpec.model = {self.model!r} is invalid: expected one of {MODELS + ('rod3d',)}.")
+        if self.model == "rod3d" and self.perturbation == "random-position":
+            raise ValueError("SweepSpec.perturbation = 'random-position' is not available with model 'rod3d': "
+                             "expected 'sine', 'random-velocity' or 'random-shape'.")
+        if self.model == "rod3d" and self.n is not None and not (isinstance(self.n, int) and self.n >= 4):
+            raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model 'rod3d': expected an int >= 4 segments.")
         if self.perturbation not in PERTURBATIONS:
             raise ValueError(
                 f"SweepSpec.perturbation = {self.perturbation!r} is invalid: expected one of "
@@ -233,8 +243,60 @@ def _valid(rod: RodChannel, p) -> jax.Array:
     return ok
 
 
+def _rod3d_member(spec: SweepSpec, n: int, dt: float):
+    """The per-member function for the 3D rod: dead load F⁰_m* + ΔF, the perturbation as a
+    lateral velocity (sine, random-velocity) or offset (random-shape) of the n + 1 nodes; the run
+    stops when it buckles (max|θ| > threshold) or when every free node is stuck."""
+    from .rod3d.model import Rod3D
+    from .rod3d.run import _all_stuck, _run
+    from .integrators.base import save_grid
+
+    n_save = 201
+    m, h = save_grid(spec.t1, n_save, dt)
+    s = np.arange(n + 1) / n
+
+    def member(p, index, base_key):
+        rod = _member_rod(spec, p)
+        ok = _valid(rod, p)
+        safe = jax.tree_util.tree_map(
+            lambda x, r: jnp.where(ok, x, r), rod, RodChannel.reference(mu=spec.mu, **spec.rod)
+        )
+        dF = jnp.where(ok, p.get("dF", spec.dF), spec.dF)
+        amp = jnp.where(ok, p.get("amplitude", spec.amplitude), spec.amplitude)
+        key = jax.random.fold_in(base_key, index)
+        F = theory.frictionless_load(safe, theory.critical_mode(safe)) + dF
+        model = Rod3D(safe, n, control="load", end_load=F)
+        u = jax.random.uniform(key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * amp
+        if spec.perturbation == "sine":
+            s0 = model.initial_state(F, lateral_velocity=amp * jnp.sin(spec.mode * jnp.pi * jnp.asarray(s)))
+        elif spec.perturbation == "random-velocity":
+            s0 = model.initial_state(F, lateral_velocity=u)
+        else:  # random-shape
+            s0 = model.initial_state(F, lateral_offset=u)
+        c, obs = _run(model, s0, jnp.asarray(h), m, n_save, spec.threshold, True, True)
+        state, buckled, t_buckle = c[0], c[4], c[5]
+        finite = jnp.all(jnp.isfinite(state.x))
+        result = jnp.where(ok, jnp.where(finite, RESULTS.successful, RESULTS.nonfinite), RESULTS.invalid_input)
+        result = result.astype(jnp.int32)
+        theta = model.theta(state.x)[1:-1]
+        return {
+            "buckled": buckled & (result == 0),
+            "t_buckle": t_buckle,
+            "dominant_mode": dominant_mode(theta).astype(jnp.int32),
+            "max_theta": jnp.max(obs["amplitude"]),
+            "final_theta": obs["amplitude"][-1],
+            "stuck": _all_stuck(model, state),
+            "t_stop": state.t,
+            "result": result,
+        }
+
+    return member
+
+
 def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     """The pure per-member function `member(params, index, base_key) -> outputs`."""
+    if spec.model == "rod3d":
+        return _rod3d_member(spec, n, dt)
     opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
 
     def member(p, index, base_key):
@@ -310,8 +372,6 @@ def _static_resolution(spec: SweepSpec, flat: dict[str, np.ndarray]):
     """n and dt from the concrete inputs: the largest load sets n, the stiffest valid member dt."""
     import jax.numpy as jnp_
 
-    from . import theory
-
     n_members = len(next(iter(flat.values())))
 
     def rod_at(i):
@@ -335,11 +395,32 @@ def _static_resolution(spec: SweepSpec, flat: dict[str, np.ndarray]):
         n = max(default_nodes(r, theory.frictionless_load(r, theory.critical_mode(r)) + dF_max) for r in rods)
     if spec.model == "galerkin" and n is None:
         n = 32
+    if spec.model == "rod3d":
+        return _rod3d_resolution(spec, rods, dF_max)
     dt = spec.dt
     if dt is None:
         dt = min(Scene(r, jnp_.asarray(dF_max), kind=spec.model, n=n, mode=spec.mode).step() for r in rods)
     grid_dt = min(Scene(r, jnp_.asarray(dF_max), kind="field", n=128).step() for r in rods)
     return n, float(dt), float(grid_dt)
+
+
+def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
+    """n (default 60 segments, E1/E6's) and dt: 0.5 of the smallest explicit limit over the
+    rods at the largest load (a given `spec.dt` must lie below it)."""
+    from .rod3d.model import Rod3D
+    from .rod3d.run import step_limit
+
+    n = spec.n or ROD3D_SEGMENTS
+    limits = []
+    for r in rods:
+        F = float(theory.frictionless_load(r, theory.critical_mode(r))) + dF_max
+        model = Rod3D(r, n, control="load", end_load=F)
+        limits.append(step_limit(model, model.initial_state(F)))
+    limit = min(limits)
+    if spec.dt is not None and not (0 < spec.dt < limit):
+        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model 'rod3d': the explicit step limit "
+                         f"is {limit:.4g} s; use 0 < dt < {limit:.4g} s.")
+    return n, float(spec.dt or 0.5 * limit), 0.0
 
 
 def _fingerprint(meta: dict) -> str:
@@ -378,6 +459,8 @@ def _atomic_write(path: str, write: Callable[[str], None], suffix: str) -> None:
 
 def _bytes_per_member(spec: SweepSpec, n: int | None) -> int:
     dof = n or 1
+    if spec.model == "rod3d":
+        dof = 20 * (n + 1)  # positions, velocities, rotations, forces, caches per node
     # state, velocity, acceleration, trial velocities, stencil temporaries, per-save records
     return 8 * (24 * dof + 64) + 4096
 

@@ -5,6 +5,7 @@ model. Each returns a dict of numbers and writes PNG + CSV; `jaxrod reproduce e1
 from __future__ import annotations
 
 import os
+import time
 
 import jax
 import jax.numpy as jnp
@@ -17,7 +18,7 @@ from .run import _run, simulate_rod3d, step_limit
 from ..integrators.base import save_grid
 from ..reproduce import _plt, _write_csv
 
-__all__ = ["sine_velocity", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "SIZES"]
+__all__ = ["sine_velocity", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "rolling_check", "SIZES"]
 
 SIZES = {
     "tiny": dict(n=12, v0s=(10e-3, 30e-3), conv=(12,), t1=0.4, n_save=201, dFs=(), n_cross=12),
@@ -214,7 +215,9 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
     F0 = float(theory.frictionless_load(rod, 6))
     out = []
     for dF in dFs:
+        t0 = time.perf_counter()
         r, _ = critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
+        t_field = time.perf_counter() - t0
         v_field = float(r.root)
         model = Rod3D(rod, n, control="load", end_load=F0 + dF, friction_at=friction_at)
         lo, hi = 0.4 * v_field, 2.5 * v_field
@@ -249,5 +252,40 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
                         monotonic=bool(monotonic and np.all(np.diff(bs.astype(int)) >= 0)),
                         smallest_buckled=float(vs[bs][0]) if bs.any() else None,
                         every_tested_amplitude_buckled=bool(bs.all()),
-                        smallest_tested=float(vs[0]), n_segments=n, friction_at=friction_at))
+                        smallest_tested=float(vs[0]), n_segments=n, friction_at=friction_at,
+                        seconds_field=round(t_field, 2), seconds_rod3d=round(time.perf_counter() - t0 - t_field, 1),
+                        rod3d_runs=len(tested)))
     return out
+
+
+def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps=(1, 16)):
+    """Does a rod that the reduced models call stuck stay put in the 3D model? The rod is
+    pre-compressed to the dead load F⁰₆ + `dF` and given a lateral offset R·A·sin(mπs/L)
+    (A = `amplitude` rad, m = `mode`) at rest; its net elastic + gravity restoring force per
+    length, |EI k⁴ − F k² + w/R|·A·R, is a fraction `margin` < 1 of μ·w (the field model's
+    stick condition, P1), so in the field model it does not move. Run for `t1` [s] with friction
+    at the contact point (`friction_at="surface"`: the rod can roll) and at the centre line
+    (`"axis"`: sliding only), each with every number of projected Gauss–Seidel friction sweeps in
+    `sweeps`.
+
+    **Returns:** dict with `margin` and, per case, `max_dtheta` (largest |θ(t1) − θ(0)| [rad]),
+    `mean_dtheta` (mean of θ(t1) − θ(0) over the interior: a rigid roll around the channel shows
+    as mean ≈ max) and `all_stuck` (every interior node held by static friction at t1).
+    """
+    rod = RodChannel.reference(mu)
+    F = float(theory.frictionless_load(rod, 6)) + dF
+    k = mode * np.pi / float(rod.L)
+    EI, w, R = float(rod.EI), float(rod.w), float(rod.R)
+    margin = abs(EI * k**4 - F * k**2 + w / R) * amplitude / (mu * w / R)
+    s = jnp.linspace(0.0, 1.0, n + 1)
+    res = {"dF": dF, "n_segments": n, "mu": mu, "mode": mode, "amplitude_rad": amplitude, "t1": t1,
+           "margin_net_force_over_mu_N": margin}
+    for where in ("surface", "axis"):
+        for sw in sweeps:
+            model = Rod3D(rod, n, control="load", end_load=F, friction_at=where, friction_sweeps=sw)
+            s0 = model.initial_state(F, lateral_offset=R * amplitude * jnp.sin(mode * jnp.pi * s))
+            sol = simulate_rod3d(model, s0, t1, 3, stop_on_buckle=False)
+            d = np.asarray(sol.theta[-1] - sol.theta[0])[1:-1]
+            res[f"{where}, {sw} sweeps"] = {"max_dtheta": float(np.max(np.abs(d))), "mean_dtheta": float(np.mean(d)),
+                                            "all_stuck": bool(jnp.all(sol.final.stuck[1:-1]))}
+    return res
