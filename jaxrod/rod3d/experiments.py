@@ -49,7 +49,7 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fracti
 
     **Returns:** dict with `displacement` (n_save,) [m], `reaction` (B, n_save) at the pushed
     end [N], `critical_force` (B,) the first peak, where the linear response breaks down [N],
-    `d_critical` [m], `buckled`.
+    `d_critical` [m], `buckled`, `steps` (steps each member took: runs stop once buckled), `dt`.
     """
     rod = RodChannel.reference(mu) if rod is None else rod
     model = Rod3D(rod, n, control="displacement", speed=speed)
@@ -68,7 +68,7 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fracti
     first = np.where(broke.any(1), np.argmax(broke, axis=1), R.shape[1] - 1)
     i = np.array([int(np.argmax(R[k, : first[k] + 1])) for k in range(len(v0s))])
     return dict(ts=ts, displacement=D, reaction=R, critical_force=R[np.arange(len(v0s)), i],
-                d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=h,
+                d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=h, steps=np.asarray(c[6]),
                 balance=np.asarray(jnp.max(jnp.abs(sum(obs["energies"].values()) + obs["dissipated"] - obs["work_in"]
                                                    - sum(obs["energies"].values())[:, :1]), axis=1)))
 

@@ -388,7 +388,9 @@ class Rod3D(eqx.Module):
         in_contact = (N > 0) & ~jnp.any(held, -1)
         idx = jnp.arange(self.n + 1)
         p_acc = jnp.zeros((self.n + 1, 2), x.dtype)  # each node's impulse so far (this half step)
-        for _ in range(self.friction_sweeps):
+
+        def sweep(carry):
+            v, w, stuck, p_acc = carry
             for colour in (0, 1):
                 active = in_contact & (idx % 2 == colour)
                 wlab = jnp.einsum("jba,jb->ja", Q, w)
@@ -408,6 +410,14 @@ class Rod3D(eqx.Module):
                 tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
                 w = w + Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg)
                 stuck = jnp.where(idx % 2 == colour, active & sticks, stuck)
+            return v, w, stuck, p_acc
+
+        carry = (v, w, stuck, p_acc)
+        if self.friction_sweeps == 1:
+            carry = sweep(carry)
+        else:  # a loop, not an unrolled copy per sweep (compile time)
+            carry = jax.lax.fori_loop(0, self.friction_sweeps, lambda _, c: sweep(c), carry)
+        v, w, stuck, _ = carry
         return v, w, stuck
 
     # -- constraints and the step limit -------------------------------------------------------

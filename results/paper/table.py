@@ -101,6 +101,13 @@ if "e6" in r and "full_model" in r["e6"]:
             rows.append((label, "models agree", f"{c['field'] * 1e3:.2f} vs {c['rod3d'] * 1e3:.2f} mm/s "
                          f"({100 * (c['rod3d'] / c['field'] - 1):+.1f} %; 3D bracket {c['rod3d_bracket'][0] * 1e3:.2f}–"
                          f"{c['rod3d_bracket'][1] * 1e3:.2f}{extra})", model, "jaxrod reproduce e6"))
+if "e6" in r and "rolling_check" in r["e6"]:
+    c = r["e6"]["rolling_check"]
+    cases = [k for k in c if isinstance(c[k], dict)]
+    rows.append((f"rod at F⁰₆ + {c['dF']:g} N, at rest with a mode-{c['mode']} offset whose net force is "
+                 f"{100 * c['margin_net_force_over_mu_N']:.0f} % of μN: largest abs Δθ after {c['t1']:g} s",
+                 "0 (stuck, P1)", "; ".join(f"{k}: {c[k]['max_dtheta']:.1e} rad" for k in cases),
+                 f"rod3d, {c['n_segments']} segments", "jaxrod reproduce e6"))
 if "helix" in r:
     h = r["helix"]
     th = h["theory"]
@@ -134,7 +141,7 @@ if "helix" in r:
                  f"{h['mu=0.3']['max_abs_theta_after_unloading']:.3f} rad", "rod3d", "jaxrod reproduce helix"))
 if "e6" in r:
     for k, v in r["e6"].items():
-        if isinstance(v, dict) and k != "full_model":
+        if isinstance(v, dict) and "dominant_mode_before" in v and k != "full_model":
             rows.append((f"E6 {k}: dominant mode before → at buckling (power share)", "one mode dominates",
                          f"{v['dominant_mode_before']} → {v['dominant_mode_after']} ({v['dominant_power_after']:.2f})",
                          f"field, n = {r['e6']['n']}", "jaxrod reproduce e6"))
