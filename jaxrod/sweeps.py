@@ -58,9 +58,10 @@ class SweepSpec:
       (amplitude units as in [`jaxrod.scene.make_perturbation`][]; "random-position", a
       timed force pulse, is not available with "rod3d").
     - `mu`: friction coefficient (μ_s = μ_d) unless swept; `dF` [N], `amplitude` defaults.
-    - `mode`: sine / single mode number; `n`: nodes or modes (`None`: the default for the
-      largest load of the sweep); `dt` [s] (`None`: 0.4 of the step limit of the stiffest
-      member); `t1` [s] horizon; `threshold` [rad] buckling amplitude.
+    - `mode`: sine / single mode number; `n`: nodes, modes or 3D segments (`None`: the
+      default for the largest load of the sweep); `dt` [s] (`None`: 0.4 of the step limit of
+      the stiffest member, 0.5 for "rod3d"); `t1` [s] horizon; `threshold` [rad] buckling
+      amplitude.
     - `rod`: overrides of the reference rod's fields (e.g. `{"R": 0.01}`).
     """
 
