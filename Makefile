@@ -15,11 +15,15 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/jaxrod map --out results/demo
 
+# Two pytest workers (pytest-xdist), one file per worker: CI has 2 cores, and most of the
+# suite's time is single-threaded XLA compilation. TEST_WORKERS=0 runs in one process.
+TEST_WORKERS ?= 2
+
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile
 
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -m slow
+	$(BIN)/python -m pytest -m slow -n $(TEST_WORKERS) --dist loadfile
 
 # Every script under benchmarks/, the quick ones first; scripts added later run after these.
 BENCH_FIRST := field_throughput alternatives sweep_throughput boundary_cost field_convergence model_choice
