@@ -244,6 +244,20 @@ def _valid(rod: RodChannel, p) -> jax.Array:
     return ok
 
 
+def _member_inputs(spec: SweepSpec, p, index, base_key):
+    """A member's validity flag, its rod (the reference rod where invalid, so that an invalid
+    member stays finite and cannot disturb the batch; it is flagged afterwards), ΔF, amplitude
+    and random key."""
+    rod = _member_rod(spec, p)
+    ok = _valid(rod, p)
+    safe = jax.tree_util.tree_map(
+        lambda x, r: jnp.where(ok, x, r), rod, RodChannel.reference(mu=spec.mu, **spec.rod)
+    )
+    dF = jnp.where(ok, p.get("dF", spec.dF), spec.dF)
+    amp = jnp.where(ok, p.get("amplitude", spec.amplitude), spec.amplitude)
+    return ok, safe, dF, amp, jax.random.fold_in(base_key, index)
+
+
 def _rod3d_member(spec: SweepSpec, n: int, dt: float):
     """The per-member function for the 3D rod: dead load F⁰_m* + ΔF, the perturbation as a
     lateral velocity (sine, random-velocity) or offset (random-shape) of the n + 1 nodes; the run
@@ -257,14 +271,7 @@ def _rod3d_member(spec: SweepSpec, n: int, dt: float):
     s = np.arange(n + 1) / n
 
     def member(p, index, base_key):
-        rod = _member_rod(spec, p)
-        ok = _valid(rod, p)
-        safe = jax.tree_util.tree_map(
-            lambda x, r: jnp.where(ok, x, r), rod, RodChannel.reference(mu=spec.mu, **spec.rod)
-        )
-        dF = jnp.where(ok, p.get("dF", spec.dF), spec.dF)
-        amp = jnp.where(ok, p.get("amplitude", spec.amplitude), spec.amplitude)
-        key = jax.random.fold_in(base_key, index)
+        ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
         F = theory.frictionless_load(safe, theory.critical_mode(safe)) + dF
         model = Rod3D(safe, n, control="load", end_load=F)
         u = jax.random.uniform(key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * amp
@@ -301,15 +308,7 @@ def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
 
     def member(p, index, base_key):
-        rod = _member_rod(spec, p)
-        ok = _valid(rod, p)
-        # keep invalid members finite so they cannot disturb the batch; flag them afterwards
-        safe = jax.tree_util.tree_map(
-            lambda x, r: jnp.where(ok, x, r), rod, RodChannel.reference(mu=spec.mu, **spec.rod)
-        )
-        dF = jnp.where(ok, p.get("dF", spec.dF), spec.dF)
-        amp = jnp.where(ok, p.get("amplitude", spec.amplitude), spec.amplitude)
-        key = jax.random.fold_in(base_key, index)
+        ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
         pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
         scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
                       grid_dt=grid_dt)
