@@ -6,10 +6,11 @@ Measured in one run (float64, this machine's CPU):
 1. the E1 critical force (μ = 0.3, v₀ = 15 mm/s, pushed at 1 mm/s) at dt = 0.9, 0.5 and 0.25 of
    the explicit limit 2/ω_max, and the wall time of each run (compile excluded: the same call
    is made twice and the second is timed);
-2. the cost of one explicit step (kick–prox–drift–kick–prox, from the timed runs) against the
-   cost of the cheapest Newton iteration of an implicit step on the same rod: the Jacobian of
-   the forces with respect to the 6(n+1) positions and rotations (`jax.jacfwd`) and one dense
-   LU solve with it (`jnp.linalg.solve`), jitted, min over repeats;
+2. the cost of one explicit step (kick–prox–drift–kick–prox, from the timed runs, over the
+   steps actually taken) against the cost of one Newton iteration of an implicit step on the
+   same rod, without the friction solve it would also need: the Jacobian of the forces with
+   respect to the 3(n+1) positions and 3n rotations (`jax.jacfwd`) and one dense LU solve with
+   it (`jnp.linalg.solve`), jitted, min over repeats; the Jacobian alone is timed too;
 3. the contact vibration a step must still resolve (or damp): the Hertz spring under the rod's
    own weight, ω_c = √(1.5 k δ^{1/2} l̄ / m) at the static sag δ, and its period.
 
@@ -17,7 +18,7 @@ The break-even step ratio is (Newton iteration cost / explicit step cost): an im
 taking that many times the explicit step with a single Newton iteration per step would only
 tie. Writes `benchmarks/results/rod3d_step_choice.csv` and prints a Markdown table.
 
-    python benchmarks/rod3d_step_choice.py            # ~5 min on 2 CPU cores
+    python benchmarks/rod3d_step_choice.py            # ~3.5 min on 2 CPU cores
     python benchmarks/rod3d_step_choice.py --quick    # 30 segments
 """
 

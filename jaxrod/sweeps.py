@@ -262,25 +262,24 @@ def _rod3d_member(spec: SweepSpec, n: int, dt: float):
     """The per-member function for the 3D rod: dead load F⁰_m* + ΔF, the perturbation as a
     lateral velocity (sine, random-velocity) or offset (random-shape) of the n + 1 nodes; the run
     stops when it buckles (max|θ| > threshold) or when every free node is stuck."""
+    from .integrators.base import save_grid
+    from .rod3d.experiments import sine_velocity
     from .rod3d.model import Rod3D
     from .rod3d.run import _all_stuck, _run
-    from .integrators.base import save_grid
 
     n_save = 201
     m, h = save_grid(spec.t1, n_save, dt)
-    s = np.arange(n + 1) / n
 
     def member(p, index, base_key):
         ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
         F = theory.frictionless_load(safe, theory.critical_mode(safe)) + dF
         model = Rod3D(safe, n, control="load", end_load=F)
-        u = jax.random.uniform(key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * amp
         if spec.perturbation == "sine":
-            s0 = model.initial_state(F, lateral_velocity=amp * jnp.sin(spec.mode * jnp.pi * jnp.asarray(s)))
-        elif spec.perturbation == "random-velocity":
-            s0 = model.initial_state(F, lateral_velocity=u)
-        else:  # random-shape
-            s0 = model.initial_state(F, lateral_offset=u)
+            s0 = model.initial_state(F, lateral_velocity=sine_velocity(model, amp, spec.mode))
+        else:
+            u = jax.random.uniform(key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * amp
+            s0 = (model.initial_state(F, lateral_velocity=u) if spec.perturbation == "random-velocity"
+                  else model.initial_state(F, lateral_offset=u))  # random-shape
         c, obs = _run(model, s0, jnp.asarray(h), m, n_save, spec.threshold, True, True)
         state, buckled, t_buckle = c[0], c[4], c[5]
         finite = jnp.all(jnp.isfinite(state.x))
