@@ -1,14 +1,23 @@
-"""Sweep throughput: members/s against chunk size, the sharded sweep against a Python loop of
-single jitted runs of the same member (ratio measured in the same run), and memory per member.
+"""Sweep throughput: continuous batching against the single-chunk scheduling it replaces and
+against a Python loop of single jitted runs, with the lane utilisation of each, side by side in
+one run.
 
-Scene: the E3 stability-map member — reference rod, field model, mu = 0.3, sine mode-6
-perturbation, runs stop when stuck or buckled (horizon 2 s). A fixed set of 256 (dF, v0) points
-spanning the map is used for every configuration.
+Scenes (reference rod, field model, sine mode-6 perturbation, runs stop when stuck or buckled,
+horizon 2 s):
 
-    python benchmarks/sweep_throughput.py [--n 128] [--devices 2]
+- `map`: the default E3 map of `jaxrod map` / `make demo`: 20 x 24 (dF, v0) points per mu,
+  mu = 0.3 and 0, n = 384 nodes (the default for dF up to 64 N).
+- `e3`: the E3 member at n = 128 on 256 (dF, v0) points spanning the map (16 x 16).
+
+Lane utilisation = member steps / lane steps: the steps the members needed over the steps the
+lanes computed. For the pool, lane steps = rounds x lanes x refill_every per device; for the
+single chunk, each device's vmapped loop runs its share of the chunk until the slowest member
+of that share stops (whole save intervals of m steps).
+
+    python benchmarks/sweep_throughput.py [--devices 1 2] [--repeats 2] [--quick]
 
 `--devices D` re-runs itself with XLA_FLAGS=--xla_force_host_platform_device_count=D (one XLA
-CPU device per core), as `jaxrod map` does.
+CPU device per core), as `jaxrod map` does. Writes benchmarks/results/sweep_throughput.csv.
 """
 
 from __future__ import annotations
@@ -16,86 +25,131 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 import os
 import subprocess
 import sys
 import time
 
 
-def child(n: int, chunks: list[int], loop_members: int) -> list[dict]:
+def _chunk_lane_steps(steps, m: int, devices: int) -> int:
+    """Lane steps of the single-chunk scheduling: every device's share runs whole intervals of
+    m steps until its slowest member stops."""
+    import numpy as np
+
+    total = 0
+    for part in np.array_split(np.asarray(steps), devices):
+        if len(part):
+            total += len(part) * m * math.ceil(int(part.max()) / m)
+    return total
+
+
+def child(scenes: list[str], repeats: int, loop_members: int) -> list[dict]:
     import jax
 
     jax.config.update("jax_enable_x64", True)
     import numpy as np
 
-    from jaxrod.sweeps import SweepSpec, _make_member, _static_resolution, sweep
+    from jaxrod.integrators.base import save_grid
+    from jaxrod.sweeps import N_SAVE, SweepSpec, _make_member, _static_resolution, sweep
 
-    spec = SweepSpec(model="field", n=n, mu=0.3)
-    dF = np.geomspace(0.5, 64, 16)
-    v0 = np.geomspace(1e-3, 0.2, 16)
-    inputs = {"dF": dF, "amplitude": v0}
-    rows = []
     dev = jax.local_device_count()
-    for cs in chunks:
+    rows = []
+
+    def timed(spec, inputs, **kw):
         t0 = time.perf_counter()
-        sweep(spec, inputs, chunk_size=cs, progress=False)  # includes the one compilation
+        res = sweep(spec, inputs, progress=False, **kw)  # includes the one compilation
         first = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        sweep(spec, inputs, chunk_size=cs, progress=False)
-        t = time.perf_counter() - t0
-        rows.append(dict(method="sweep", devices=dev, n=n, chunk=cs, members=256,
-                         seconds=round(t, 3), compile_s=round(first - t, 3), members_per_s=256 / t))
-    # Python loop over single jitted runs of the same member function
-    flat = {"dF": np.repeat(dF, 16), "amplitude": np.tile(v0, 16)}
-    n_, dt, grid_dt = _static_resolution(spec, flat)
-    member = jax.jit(_make_member(spec, n_, dt, grid_dt))
-    key = jax.random.key(0)
-    pick = np.linspace(0, 255, loop_members).astype(int)
-    p0 = {k: np.float64(v[0]) for k, v in flat.items()}
-    jax.block_until_ready(member(p0, 0, key))  # compile
-    t0 = time.perf_counter()
-    for i in pick:
-        jax.block_until_ready(member({k: np.float64(v[i]) for k, v in flat.items()}, int(i), key))
-    t = time.perf_counter() - t0
-    rows.append(dict(method="python loop of jitted single runs", devices=dev, n=n, chunk=1,
-                     members=loop_members, seconds=round(t, 3), compile_s=None, members_per_s=loop_members / t))
-    # memory per member from XLA's buffer assignment of a 256-member chunk
-    run = jax.jit(jax.vmap(_make_member(spec, n_, dt, grid_dt), in_axes=(0, 0, None)))
-    args = ({k: np.asarray(v) for k, v in flat.items()}, np.arange(256), jax.random.key(0))
-    mem = run.lower(*args).compile().memory_analysis()
-    if mem is not None:
-        per = (mem.temp_size_in_bytes + mem.argument_size_in_bytes + mem.output_size_in_bytes) / 256
-        rows.append(dict(method="memory per member (XLA buffers, chunk 256)", devices=dev, n=n, chunk=256,
-                         members=256, seconds=None, compile_s=None, members_per_s=None, bytes_per_member=per))
+        best = math.inf
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            res = sweep(spec, inputs, progress=False, **kw)
+            best = min(best, time.perf_counter() - t0)
+        return res, best, first - best
+
+    for scene in scenes:
+        if scene == "map":
+            cases = [(SweepSpec(model="field", mu=mu),
+                      {"dF": np.geomspace(0.5, 64, 20), "amplitude": np.geomspace(1e-3, 0.2, 24)})
+                     for mu in (0.3, 0.0)]
+        else:
+            cases = [(SweepSpec(model="field", n=128, mu=0.3),
+                      {"dF": np.geomspace(0.5, 64, 16), "amplitude": np.geomspace(1e-3, 0.2, 16)})]
+        for spec, inputs in cases:
+            labels = {}
+            for sched in ("chunk", "pool"):
+                res, t, compile_s = timed(spec, inputs, scheduling=sched)
+                m, _ = save_grid(spec.t1, N_SAVE, res.meta["dt"])
+                lane_steps = (res.meta["lane_steps"] if sched == "pool"
+                              else _chunk_lane_steps(res.outputs["steps"], m, dev))
+                labels[sched] = res.outputs["buckled"].copy()
+                rows.append(dict(
+                    scene=scene, mu=spec.mu, n=res.meta["n"], devices=dev, method=sched,
+                    members=len(res), seconds=round(t, 3), compile_s=round(compile_s, 2),
+                    members_per_s=round(len(res) / t, 1),
+                    utilisation=round(res.meta["member_steps"] / lane_steps, 3),
+                    buckled=int(res.outputs["buckled"].sum()),
+                ))
+            assert (labels["chunk"] == labels["pool"]).all(), "pool and chunk disagree"
+            if scene == "e3":
+                # Python loop of single jitted runs of the same member function
+                flat = {k: np.repeat(v, 16) if k == "dF" else np.tile(v, 16) for k, v in inputs.items()}
+                n_, dt, grid_dt = _static_resolution(spec, flat)
+                member = jax.jit(_make_member(spec, n_, dt, grid_dt))
+                key = jax.random.key(0)
+                pick = np.linspace(0, len(flat["dF"]) - 1, loop_members).astype(int)
+                jax.block_until_ready(member({k: np.float64(v[0]) for k, v in flat.items()}, 0, key))
+                t0 = time.perf_counter()
+                for i in pick:
+                    jax.block_until_ready(member({k: np.float64(v[i]) for k, v in flat.items()}, int(i), key))
+                t = time.perf_counter() - t0
+                rows.append(dict(scene=scene, mu=spec.mu, n=n_, devices=dev,
+                                 method="python loop of single jitted runs", members=loop_members,
+                                 seconds=round(t, 3), members_per_s=round(loop_members / t, 1)))
     return rows
 
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--n", type=int, default=128)
     ap.add_argument("--devices", type=int, nargs="*", default=[1, 2])
-    ap.add_argument("--chunks", type=int, nargs="*", default=[16, 64, 256])
-    ap.add_argument("--loop-members", type=int, default=32)
+    ap.add_argument("--scenes", nargs="*", default=["map", "e3"], choices=["map", "e3"])
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--loop-members", type=int, default=64)
+    ap.add_argument("--quick", action="store_true", help="e3 scene only, 2 devices, 1 repeat")
     ap.add_argument("--out", default="benchmarks/results/sweep_throughput.csv")
     ap.add_argument("--_child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.quick:
+        args.devices, args.scenes, args.repeats, args.loop_members = [2], ["e3"], 1, 32
     if args._child:
-        print("ROWS " + json.dumps(child(args.n, args.chunks, args.loop_members)))
+        print("ROWS " + json.dumps(child(args.scenes, args.repeats, args.loop_members)))
         return
     rows = []
     for d in args.devices:
         env = dict(os.environ, XLA_FLAGS=f"--xla_force_host_platform_device_count={d}")
-        cmd = [sys.executable, __file__, "--_child", "--n", str(args.n), "--loop-members",
-               str(args.loop_members), "--chunks", *map(str, args.chunks)]
-        out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True).stdout
-        rows += json.loads(out.split("ROWS ", 1)[1])
-    loop = {r["devices"]: r["members_per_s"] for r in rows if r["method"].startswith("python")}
+        cmd = [sys.executable, __file__, "--_child", "--repeats", str(args.repeats),
+               "--loop-members", str(args.loop_members), "--scenes", *args.scenes]
+        out = subprocess.run(cmd, capture_output=True, text=True, env=env)
+        if out.returncode != 0:
+            sys.exit(out.stderr[-3000:])
+        rows += json.loads(out.stdout.split("ROWS ", 1)[1])
+    import jax
+
+    print(f"jax {jax.__version__}, {jax.devices()[0].platform}, float64, {os.cpu_count()} cores")
     for r in rows:
-        if r["method"] == "sweep":
-            r["ratio_vs_loop"] = r["members_per_s"] / loop[r["devices"]]
-    keys = sorted({k for r in rows for k in r}, key=lambda k: list(rows[0]).index(k) if k in rows[0] else 99)
+        same = [o for o in rows if (o["scene"], o["mu"], o["devices"]) == (r["scene"], r["mu"], r["devices"])]
+        chunk = next((o for o in same if o["method"] == "chunk"), None)
+        loop = next((o for o in same if o["method"].startswith("python")), None)
+        if r["method"] == "pool":
+            r["x_chunk"] = round(chunk["seconds"] / r["seconds"], 2)
+            if loop is not None:
+                r["x_loop"] = round(r["members_per_s"] / loop["members_per_s"], 2)
+        if r["method"] == "chunk" and loop is not None:
+            r["x_loop"] = round(r["members_per_s"] / loop["members_per_s"], 2)
+        print(r)
+    keys = []
     for r in rows:
-        print({k: (round(v, 2) if isinstance(v, float) else v) for k, v in r.items()})
+        keys += [k for k in r if k not in keys]
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
     with open(args.out, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=keys)

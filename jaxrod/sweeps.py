@@ -31,7 +31,8 @@ import numpy as np
 
 from ._results import RESULTS
 from .integrators import ProjectedVerlet
-from .integrators.base import RunOptions
+from .batching import DEFAULT_LANES, DEFAULT_REFILL_EVERY, run_pool
+from .integrators.base import RunOptions, save_grid
 from .modal import dominant_mode
 from .params import RodChannel
 from .scene import MODELS, PERTURBATIONS, Scene, default_nodes, make_perturbation
@@ -44,7 +45,8 @@ ROD_FIELDS = ("L", "d", "E", "rho_v", "nu", "R", "g", "mu_s", "mu_d")
 PARAMETERS = ("dF", "amplitude", "mu", "realization") + ROD_FIELDS
 _STIFFNESS_FIELDS = ("L", "d", "E", "rho_v", "R", "g")  # set the step limit
 ROD3D_SEGMENTS = 60  # as E1 and E6 (README: the full model)
-OUTPUTS = ("buckled", "t_buckle", "dominant_mode", "max_theta", "final_theta", "stuck", "t_stop", "result")
+OUTPUTS = ("buckled", "t_buckle", "dominant_mode", "max_theta", "final_theta", "stuck", "t_stop", "result",
+           "steps")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -180,7 +182,8 @@ class SweepResult:
             if os.path.exists(f):
                 with np.load(f) as z:
                     for k in OUTPUTS:
-                        outputs[k][c * cs : c * cs + len(z[k])] = z[k]
+                        if k in z:  # "steps" is absent from sweeps written before it existed
+                            outputs[k][c * cs : c * cs + len(z["result"])] = z[k]
         return cls(inputs, outputs, tuple(meta["shape"]), tuple(meta["names"]), meta)
 
     @staticmethod
@@ -196,7 +199,7 @@ class SweepResult:
 
 _FILL = {
     "buckled": False, "t_buckle": np.inf, "dominant_mode": 0, "max_theta": np.nan,
-    "final_theta": np.nan, "stuck": False, "t_stop": np.nan, "result": -1,
+    "final_theta": np.nan, "stuck": False, "t_stop": np.nan, "result": -1, "steps": -1,
 }
 
 
@@ -262,7 +265,6 @@ def _rod3d_member(spec: SweepSpec, n: int, dt: float):
     """The per-member function for the 3D rod: dead load F⁰_m* + ΔF, the perturbation as a
     lateral velocity (sine, random-velocity) or offset (random-shape) of the n + 1 nodes; the run
     stops when it buckles (max|θ| > threshold) or when every free node is stuck."""
-    from .integrators.base import save_grid
     from .rod3d.experiments import sine_velocity
     from .rod3d.model import Rod3D
     from .rod3d.run import _all_stuck, _run
@@ -295,45 +297,74 @@ def _rod3d_member(spec: SweepSpec, n: int, dt: float):
             "stuck": _all_stuck(model, state),
             "t_stop": state.t,
             "result": result,
+            "steps": c[6],
         }
 
     return member
 
 
-def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
-    """The pure per-member function `member(params, index, base_key) -> outputs`."""
-    if spec.model == "rod3d":
-        return _rod3d_member(spec, n, dt)
-    opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
+N_SAVE = 201  # the stick test runs at every save, so a stuck member stops within t1/200
 
-    def member(p, index, base_key):
+
+def _reduced_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
+    """A reduced-model member in three pure parts: `setup(params, index, base_key)` gives its
+    model and (q₀, v₀), the fixed-step engine runs it, `outputs(model, run, ok)` summarises."""
+    integrator = ProjectedVerlet(dt)
+    opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
+    m, h = save_grid(spec.t1, N_SAVE, dt)
+
+    def setup(p, index, base_key):
         ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
         pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
         scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
                       grid_dt=grid_dt)
         model = scene.model()
         q0, v0 = scene.initial_state()
-        # 201 saves: the stick test runs at every save, so a stuck member stops within t1/200
-        sol = simulate(model, ProjectedVerlet(dt), q0, v0, spec.t1, n_save=201, options=opts, throw=False)
+        return ok, model, integrator.start(model, q0, v0, opts)
+
+    def advance(model, run):
+        return integrator.advance(model, run, jnp.asarray(h, run.t.dtype), m, N_SAVE, opts)
+
+    def finished(run):
+        return run.finished(N_SAVE)
+
+    def outputs(ok, model, run):
         if spec.model == "field":
-            dom = dominant_mode(sol.q_final)
+            dom = dominant_mode(run.q)
         elif spec.model == "galerkin":
-            dom = jnp.argmax(jnp.abs(sol.q_final)) + 1
+            dom = jnp.argmax(jnp.abs(run.q)) + 1
         else:
             dom = jnp.asarray(spec.mode)
-        # largest deflection reached: the final one for a buckled (stopped) member, else the max
-        max_theta = jnp.maximum(jnp.max(sol.amplitude), model.amplitude(sol.q_final))
-        result = jnp.where(ok, sol.result, RESULTS.invalid_input).astype(jnp.int32)
+        code = integrator.result(model, run, jnp.asarray(h, run.t.dtype))
+        result = jnp.where(ok & model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
         return {
-            "buckled": sol.buckled & (result == 0),
-            "t_buckle": sol.t_buckle,
+            "buckled": run.buckled & (result == 0),
+            "t_buckle": run.t_buckle,
             "dominant_mode": dom.astype(jnp.int32),
-            "max_theta": max_theta,
-            "final_theta": model.amplitude(sol.q_final),
-            "stuck": sol.stuck[-1],
-            "t_stop": sol.t_stop,
+            "max_theta": run.amp_max,
+            "final_theta": model.amplitude(run.q),
+            "stuck": run.stuck,
+            "t_stop": run.stop_time(spec.t1, N_SAVE),
             "result": result,
+            "steps": run.steps,
         }
+
+    return setup, advance, finished, outputs
+
+
+def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
+    """The pure per-member function `member(params, index, base_key) -> outputs` (one whole run:
+    the "chunk" scheduling, and single runs)."""
+    if spec.model == "rod3d":
+        return _rod3d_member(spec, n, dt)
+    setup, advance, finished, outputs = _reduced_member(spec, n, dt, grid_dt)
+
+    m, _ = save_grid(spec.t1, N_SAVE, dt)
+
+    def member(p, index, base_key):
+        ok, model, run = setup(p, index, base_key)
+        interval = lambda r: jax.lax.fori_loop(0, m, lambda _, r: advance(model, r), r)
+        return outputs(ok, model, jax.lax.while_loop(lambda r: ~finished(r), interval, run))
 
     return member
 
@@ -476,6 +507,9 @@ def sweep(
     members: range | None = None,
     progress: bool = True,
     on_chunk: Callable[[int], None] | None = None,
+    scheduling: str = "pool",
+    lanes: int = DEFAULT_LANES,
+    refill_every: int = DEFAULT_REFILL_EVERY,
 ) -> SweepResult:
     """Run one rod per member of `inputs` and collect per-member results.
 
@@ -495,8 +529,13 @@ def sweep(
     - `chunk_size`: members per chunk (rounded up to a multiple of the device count); default
       from `memory_mb`, at most 1024 (larger chunks wait longer for their slowest member).
     - `members`: a sub-range of global member indices to run (multi-host splitting).
-    - `progress`: show a progress bar per chunk with members/s; `on_chunk(c)`: called after
+    - `progress`: show a progress bar (members, members/s); `on_chunk(c)`: called after
       chunk c is finished (and written).
+    - `scheduling`: `"pool"` (default): continuous batching — each device runs `lanes` members
+      side by side and a lane whose member has stopped takes the next pending one every
+      `refill_every` steps, inside one compiled loop ([`jaxrod.batching.run_pool`][]);
+      `"chunk"`: the whole chunk vmapped at once, running until its slowest member stops
+      (kept for comparison; the 3D rod uses it). Results are identical either way.
 
     **Returns:** a [`jaxrod.SweepResult`][].
 
@@ -523,6 +562,13 @@ def sweep(
         chunk_size = int(max(1, min(1024, memory_mb * 2**20 // _bytes_per_member(spec, n))))
     if not (isinstance(chunk_size, int) and chunk_size >= 1):
         raise ValueError(f"chunk_size = {chunk_size!r} is invalid: expected an int >= 1.")
+    if scheduling not in ("pool", "chunk"):
+        raise ValueError(f"scheduling = {scheduling!r} is invalid: expected 'pool' or 'chunk'.")
+    for name, val in (("lanes", lanes), ("refill_every", refill_every)):
+        if not (isinstance(val, int) and val >= 1):
+            raise ValueError(f"{name} = {val!r} is invalid: expected an int >= 1.")
+    if spec.model == "rod3d":
+        scheduling = "chunk"
     index = np.arange(members.start, members.stop)
     chunk_size = math.ceil(min(chunk_size, len(index)) / n_dev) * n_dev
     sel = {k: v[index] for k, v in flat.items()}
@@ -561,10 +607,15 @@ def sweep(
         else:
             _atomic_write(_meta_file(path), lambda f: _dump_json(meta, f), ".json")
 
-    run_chunk = _chunk_runner(json.dumps(spec.to_json(), sort_keys=True), n, dt, grid_dt)
+    spec_json = json.dumps(spec.to_json(), sort_keys=True)
+    if scheduling == "pool":
+        run_chunk = _pool_runner(spec_json, n, dt, grid_dt, lanes, refill_every)
+    else:
+        run_chunk = _chunk_runner(spec_json, n, dt, grid_dt)
     base_key = jax.random.key(seed)
     mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()), ("batch",))
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("batch"))
+    lane_steps = 0
 
     outputs = {k: np.full(len(index), _FILL[k]) for k in OUTPUTS}
     n_chunks = math.ceil(len(index) / chunk_size)
@@ -577,17 +628,25 @@ def sweep(
         if f is not None and os.path.exists(f):
             with np.load(f) as z:
                 for k in OUTPUTS:
-                    outputs[k][lo:hi] = z[k]
+                    if k in z:
+                        outputs[k][lo:hi] = z[k]
             bar.update(1, hi - lo, skipped=True)
             continue
         pad = chunk_size - (hi - lo)
+        # deal the chunk's members to the devices in turn (member j to device j mod D): the
+        # members of one region of a grid take similar times, so contiguous shares would leave
+        # one device with most of the work (61 % / 39 % on the default map at μ = 0.3)
+        deal = np.arange(chunk_size).reshape(-1, n_dev).T.ravel()
         params = {
-            k: jax.device_put(np.pad(v[lo:hi], (0, pad), mode="edge").astype(dtype), sharding)
+            k: jax.device_put(np.pad(v[lo:hi], (0, pad), mode="edge").astype(dtype)[deal], sharding)
             for k, v in sel.items()
         }
-        idx = jax.device_put(np.pad(index[lo:hi], (0, pad), mode="edge"), sharding)
-        out = jax.device_get(run_chunk(params, idx, base_key))
-        chunk_out = {k: np.asarray(out[k])[: hi - lo] for k in OUTPUTS}
+        idx = jax.device_put(np.pad(index[lo:hi], (0, pad), mode="edge")[deal], sharding)
+        valid = jax.device_put((np.arange(chunk_size) < hi - lo)[deal], sharding)
+        out = jax.device_get(run_chunk(params, idx, valid, base_key))
+        lane_steps += int(np.sum(out.pop("lane_steps", 0)))
+        undeal = np.argsort(deal)
+        chunk_out = {k: np.asarray(out[k])[undeal][: hi - lo] for k in OUTPUTS}
         for k in OUTPUTS:
             outputs[k][lo:hi] = chunk_out[k]
         if f is not None:
@@ -598,7 +657,12 @@ def sweep(
             on_chunk(c)
     bar.close(time.perf_counter() - t_start)
     inputs_out = {**sel, "index": index}
-    return SweepResult(inputs_out, outputs, tuple(meta["shape"]), names, meta)
+    result = SweepResult(inputs_out, outputs, tuple(meta["shape"]), names, meta)
+    # how this call used its lanes (not part of the results, nor of the resume fingerprint)
+    member_steps = int(np.sum(np.where(outputs["steps"] > 0, outputs["steps"], 0)))
+    result.meta = {**meta, "scheduling": scheduling, "lanes": lanes, "refill_every": refill_every,
+                   "lane_steps": lane_steps, "member_steps": member_steps}
+    return result
 
 
 @functools.lru_cache(maxsize=16)
@@ -609,10 +673,32 @@ def _chunk_runner(spec_json: str, n, dt, grid_dt):
     member = _make_member(SweepSpec(**d), n, dt, grid_dt)
 
     @jax.jit
-    def run_chunk(params, idx, base_key):
+    def run_chunk(params, idx, valid, base_key):
         return jax.vmap(member, in_axes=(0, 0, None))(params, idx, base_key)
 
     return run_chunk
+
+
+@functools.lru_cache(maxsize=16)
+def _pool_runner(spec_json: str, n, dt, grid_dt, lanes: int, refill_every: int):
+    """One jitted chunk function with continuous batching: every device sets up its share of
+    the chunk's members, runs them in `lanes` lanes ([`jaxrod.batching.run_pool`][]) and
+    summarises them. Also returns the lane steps computed per device (for the utilisation)."""
+    setup, advance, finished, outputs = _reduced_member(SweepSpec(**json.loads(spec_json)), n, dt, grid_dt)
+    mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()), ("batch",))
+    P = jax.sharding.PartitionSpec
+
+    def run_chunk(params, idx, valid, base_key):
+        ok, models, runs = jax.vmap(setup, in_axes=(0, 0, None))(params, idx, base_key)
+        (models, runs), stats = run_pool(
+            lambda mr: (mr[0], advance(*mr)), lambda mr: finished(mr[1]), (models, runs), valid,
+            lanes, refill_every,
+        )
+        out = jax.vmap(outputs)(ok, models, runs)
+        return {**out, "lane_steps": stats.lane_steps[None]}
+
+    return jax.jit(jax.shard_map(run_chunk, mesh=mesh, in_specs=(P("batch"), P("batch"), P("batch"), P()),
+                                 out_specs=P("batch"), check_vma=False))
 
 
 def _dump_json(meta, f):

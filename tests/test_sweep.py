@@ -6,6 +6,7 @@ import sys
 import textwrap
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -188,3 +189,64 @@ def test_rod3d_sweep_matches_single_runs_and_flags_bad_members():
         SweepSpec(model="rod3d", perturbation="random-position")
     with pytest.raises(ValueError, match="SweepSpec.dt"):
         sweep(SweepSpec(model="rod3d", n=12, dt=1.0), {"dF": [1.0]}, progress=False)
+
+
+def test_pool_member_equals_its_single_run_bit_for_bit():
+    """Continuous batching: each member of a pooled sweep is exactly the `simulate` run of its
+    scene (same steps, same stop), whatever lane it ran in."""
+    from jaxrod.scene import Scene, make_perturbation
+
+    spec = SweepSpec(model="field", n=24, perturbation="random-velocity", t1=0.3)
+    res = sweep(spec, {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05], "realization": [0, 1]},
+                seed=5, lanes=3, refill_every=7, progress=False)
+    assert res.meta["scheduling"] == "pool"
+    assert res.outputs["buckled"].any() and not res.outputs["buckled"].all()
+    rod = jr.RodChannel.reference(0.3)
+    for i in range(len(res)):
+        key = jax.random.fold_in(jax.random.key(5), i)
+        pert = make_perturbation("random-velocity", res.inputs["amplitude"][i], 6, key)
+        scene = Scene(rod, res.inputs["dF"][i], pert, "field", n=24, dt=res.meta["dt"])
+        sol = scene.run(t1=0.3, save_state=False)
+        o = {k: v[i] for k, v in res.outputs.items()}
+        assert o["buckled"] == bool(sol.buckled) and o["stuck"] == bool(sol.stuck[-1])
+        assert o["t_buckle"] == float(sol.t_buckle) and o["t_stop"] == float(sol.t_stop)
+        assert o["max_theta"] == float(jnp.max(sol.amplitude))
+        assert o["final_theta"] == float(sol.amplitude[-1])
+        assert o["steps"] == int(sol.n_steps)
+        assert o["dominant_mode"] == int(jr.modal.dominant_mode(sol.q_final))
+
+
+@pytest.mark.parametrize("model,n", [("field", 16), ("galerkin", 8), ("mode", None)])
+def test_pool_does_not_depend_on_lanes_refills_or_scheduling(model, n):
+    spec = SweepSpec(model=model, n=n, perturbation="random-velocity", t1=0.3)
+    inputs = {"dF": [1.0, 20.0, 40.0], "amplitude": [0.002, 0.05], "realization": [0, 1]}
+    ref = sweep(spec, inputs, seed=2, scheduling="chunk", progress=False)
+    for lanes, every, chunk in ((1, 1, None), (4, 16, 5), (64, 3, None)):
+        res = sweep(spec, inputs, seed=2, lanes=lanes, refill_every=every, chunk_size=chunk, progress=False)
+        for k in ref.outputs:
+            np.testing.assert_array_equal(res.outputs[k], ref.outputs[k], err_msg=f"{k}, B={lanes}")
+        assert 0 < res.meta["member_steps"] <= res.meta["lane_steps"]
+
+
+def test_run_pool_runs_every_valid_run_to_its_end():
+    """The pool on counters of known lengths: every valid run stops at its own length, runs
+    marked invalid are returned untouched, and the lane steps follow the rounds."""
+    from jaxrod.batching import run_pool
+
+    lengths = jnp.array([5, 1, 40, 3, 3, 17, 2, 9, 30, 1, 8], jnp.int32)
+    valid = jnp.arange(11) != 4
+    runs = {"count": jnp.zeros(11, jnp.int32), "length": lengths}
+    advance = lambda r: {**r, "count": r["count"] + (r["count"] < r["length"]).astype(jnp.int32)}
+    finished = lambda r: r["count"] >= r["length"]
+    out, stats = jax.jit(lambda r, v: run_pool(advance, finished, r, v, lanes=3, refill_every=4))(runs, valid)
+    np.testing.assert_array_equal(out["count"], jnp.where(valid, lengths, 0))
+    assert int(stats.lane_steps) == int(stats.rounds) * 3 * 4
+    # 10 runs of 119 steps in total on 3 lanes: at least 119 / 3 steps, rounded up to rounds of 4
+    assert int(stats.rounds) * 4 >= 119 / 3 and int(stats.lane_steps) >= int(jnp.sum(jnp.where(valid, lengths, 0)))
+
+
+def test_pool_arguments_are_checked():
+    with pytest.raises(ValueError, match="scheduling"):
+        sweep(SPEC, INPUTS, scheduling="fifo", progress=False)
+    with pytest.raises(ValueError, match="lanes = 0"):
+        sweep(SPEC, INPUTS, lanes=0, progress=False)

@@ -8,12 +8,13 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from jaxtyping import Array
 
 from .._results import RESULTS
 from ..models.base import AbstractModel
 from ..solution import Solution
 
-__all__ = ["AbstractIntegrator", "AbstractFixedStep", "RunOptions"]
+__all__ = ["AbstractIntegrator", "AbstractFixedStep", "RunOptions", "RunState"]
 
 
 class RunOptions(eqx.Module):
@@ -55,10 +56,12 @@ class AbstractIntegrator(eqx.Module):
 
 def friction_work(model, v_prev, v_trial, v_after):
     """Energy friction dissipated by an impulse that took `v_trial` to `v_after` over a
-    (half) step that began at velocity `v_prev`: the impulse times the mean velocity over the
-    step, (v_trial − v_after)·M·(v_prev + v_after)/2 (a midpoint rule for ∫ f|v| dt). Zero for
-    a point held at rest: it does not move, so friction does no work on it."""
-    return jax.jvp(model.kinetic_energy, (0.5 * (v_prev + v_after),), (v_trial - v_after,))[1]
+    (half) step that began at velocity `v_prev`, per degree of freedom (shape of `v`): the
+    impulse times the mean velocity over the step, (v_trial − v_after)·M·(v_prev + v_after)/2
+    (a midpoint rule for ∫ f|v| dt). Zero for a point held at rest: it does not move, so
+    friction does no work on it. Kept per degree of freedom and summed only at the saves: a sum
+    over the nodes at every step costs as much as the rest of the step's bookkeeping."""
+    return jax.grad(model.kinetic_energy)(0.5 * (v_prev + v_after)) * (v_trial - v_after)
 
 
 def save_grid(t1: float, n_save: int, dt: float) -> tuple[int, float]:
@@ -74,7 +77,8 @@ def summarize(model, ts, qs, vs, dissipated, options, n_steps, extra_bad=False):
     thr = options.threshold(model)
     amp = jax.vmap(model.amplitude)(qs)
     energies = jax.vmap(model.energy_terms)(qs, vs, ts)
-    stuck = jax.vmap(model.is_stuck)(qs, vs, ts)
+    accs = jax.vmap(model.acceleration)(qs, ts)
+    stuck = jax.vmap(model.is_stuck)(qs, vs, accs, ts)
     over = amp > thr
     buckled = jnp.any(over)
     i_b = jnp.argmax(over)
@@ -101,12 +105,53 @@ def summarize(model, ts, qs, vs, dissipated, options, n_steps, extra_bad=False):
     )
 
 
+class RunState(eqx.Module):
+    """Where one fixed-step run stands: the state and its stop bookkeeping.
+
+    The same state is advanced by [`jaxrod.simulate`][] (one run, with saves) and by the
+    continuous-batching pool of the sweeps (many runs in lanes), one step at a time, so a sweep
+    member takes exactly the steps of its single run.
+
+    **Fields:** `q`, `v` (the model's coordinates and velocities), `a` (the conservative
+    acceleration at (q, t)), `t` [s], `dissipated` (energy removed by friction, per degree
+    of freedom: its sum is the total),
+    `buckled`, `t_buckle` [s] (`inf` if not), `stuck` (at the last save), `stopped` (buckled,
+    stuck under a constant load, or non-finite: frozen before the horizon), `steps` (taken),
+    `k` (steps since the last save), `saves` (save intervals completed), `amp_max` (largest
+    amplitude seen at a save or at the stop).
+    """
+
+    q: Array
+    v: Array
+    a: Array
+    t: Array
+    dissipated: Array
+    buckled: Array
+    t_buckle: Array
+    stuck: Array
+    stopped: Array
+    steps: Array
+    k: Array
+    saves: Array
+    amp_max: Array
+
+    def finished(self, n_save: int):
+        """Whether the run is over: stopped, or all `n_save − 1` save intervals done."""
+        return self.stopped | (self.saves >= n_save - 1)
+
+    def stop_time(self, t1: float, n_save: int):
+        """When the run stopped [s]: `t` if it stopped early, else the horizon `t1`."""
+        return jnp.where(self.stopped, self.t, jnp.linspace(0.0, t1, n_save, dtype=self.t.dtype)[-1])
+
+
 class AbstractFixedStep(AbstractIntegrator):
     """A fixed-step one-step scheme. Subclasses define `dt` and `step`.
 
     The time loop checks the buckling threshold after every step (so `t_buckle` is resolved to
     one step) and the stick test at every save; a stopped run is frozen, and with
     `early_exit` the loop ends once the run (every member of a vmapped batch) has stopped.
+    The loop is written once, as `start` and `advance` on a [`RunState`][]: `integrate` runs
+    it with saves, the sweeps run it in lanes with continuous batching.
     """
 
     dt: eqx.AbstractVar[float]
@@ -115,102 +160,109 @@ class AbstractFixedStep(AbstractIntegrator):
     def step(self, model: AbstractModel, q, v, a, t, h):
         """One step of size `h` from (q, v) at time t, with `a` = the conservative acceleration
         at (q, t) (reused across steps). Returns `(q, v, a, dissipated)` at t + h, where
-        `dissipated` is the energy friction removed during the step."""
+        `dissipated` is the energy friction removed during the step per degree of freedom
+        (shape of `v`; see `friction_work`)."""
 
     def step_limit(self, model):
         om = model.max_frequency()
         return jnp.where(om > 0, 2.0 / jnp.where(om > 0, om, 1.0), jnp.inf)
 
-    def integrate(self, model, q0, v0, t1, n_save, options=RunOptions()):
-        m, h = save_grid(t1, n_save, self.dt)
+    def start(self, model: AbstractModel, q0, v0, options: RunOptions) -> RunState:
+        """The [`RunState`][] at t = 0 (stuck at once if the initial state is held)."""
         dtype = jnp.result_type(float)
         q0 = jnp.asarray(q0, dtype=dtype)
         v0 = jnp.asarray(v0, dtype=dtype)
-        thr = options.threshold(model)
-        freeze_stuck = options.stop_when_stuck and model.autonomous
-        zero = jnp.zeros((), dtype)
-        t_ = jnp.asarray(0, dtype)
-        a0 = model.acceleration(q0, t_)
+        t = jnp.zeros((), dtype)
+        a = model.acceleration(q0, t)
+        stuck = model.is_stuck(q0, v0, a, t)
+        return RunState(
+            q=q0, v=v0, a=a, t=t, dissipated=jnp.zeros_like(v0),
+            buckled=jnp.array(False), t_buckle=jnp.asarray(jnp.inf, dtype), stuck=stuck,
+            stopped=stuck & _freezes_stuck(model, options),
+            steps=jnp.array(0, jnp.int32), k=jnp.array(0, jnp.int32),
+            saves=jnp.array(0, jnp.int32), amp_max=model.amplitude(q0),
+        )
 
-        # carry: q, v, a, t, D, buckled, t_buckle, done, steps
-        def one(c, _):
-            q, v, a, t, D, buckled, t_b, done, steps = c
-            q1, v1, a1, dD = self.step(model, q, v, a, t, h)
-            t1_ = t + h
-            new_b = model.amplitude(q1) > thr
-            keep = lambda old, new: jnp.where(done, old, new)
-            return (
-                keep(q, q1), keep(v, v1), keep(a, a1), keep(t, t1_), keep(D, D + dD),
-                keep(buckled, new_b), keep(t_b, jnp.where(new_b, t1_, t_b)),
-                done | new_b, steps + jnp.where(done, 0, 1),
-            ), None
+    def advance(self, model: AbstractModel, s: RunState, h, m: int, n_save: int,
+                options: RunOptions) -> RunState:
+        """One step of `h` [s] with the stop rules: buckling (amplitude past the threshold)
+        and a non-finite amplitude after every step; at every `m`-th step a save, with the stick
+        test (which freezes the run under a constant load). A finished run is left as it is:
+        it takes a step of zero length (an exact identity of the scheme, and much cheaper than
+        selecting between old and new arrays), and its bookkeeping is kept."""
+        frozen = s.finished(n_save)
+        h = jnp.where(frozen, jnp.zeros_like(h), h)
+        q, v, a, dD = self.step(model, s.q, s.v, s.a, s.t, h)
+        t = s.t + h
+        amp = model.amplitude(q)
+        new_b = amp > options.threshold(model)
+        k = s.k + 1
+        at_save = k == m
+        blown = new_b | ~jnp.isfinite(amp)  # a buckled or non-finite state is not held
+        stuck = jnp.where(at_save, model.is_stuck(q, v, a, t), s.stuck & ~blown)
+        stopped = blown | (at_save & stuck & _freezes_stuck(model, options))
+        keep = lambda old, new: jnp.where(frozen, old, new)
+        return RunState(
+            q=q, v=v, a=a, t=t, dissipated=s.dissipated + dD,
+            buckled=keep(s.buckled, new_b), t_buckle=keep(s.t_buckle, jnp.where(new_b, t, s.t_buckle)),
+            stuck=keep(s.stuck, stuck), stopped=keep(s.stopped, stopped),
+            steps=keep(s.steps, s.steps + 1), k=keep(s.k, jnp.where(at_save, 0, k)),
+            saves=keep(s.saves, s.saves + at_save.astype(s.saves.dtype)),
+            amp_max=keep(s.amp_max, jnp.where(at_save | stopped, jnp.maximum(s.amp_max, amp), s.amp_max)),
+        )
 
-        def record(q, v, t, stuck, D):
+    def integrate(self, model, q0, v0, t1, n_save, options=RunOptions()):
+        m, h = save_grid(t1, n_save, self.dt)
+        dtype = jnp.result_type(float)
+        h = jnp.asarray(h, dtype)
+        s0 = self.start(model, q0, v0, options)
+
+        def record(s):
             rec = {
-                "stuck": stuck,
-                "dissipated": D,
-                "amplitude": model.amplitude(q),
-                "energies": model.energy_terms(q, v, t),
+                "stuck": s.stuck,
+                "dissipated": jnp.sum(s.dissipated),
+                "amplitude": model.amplitude(s.q),
+                "energies": model.energy_terms(s.q, s.v, s.t),
             }
             if options.save_state:
-                rec["q"], rec["v"] = q, v
+                rec["q"], rec["v"] = s.q, s.v
             return rec
 
-        def interval(c):
-            c, _ = jax.lax.scan(one, c, None, length=m)
-            q, v, a, t, D, buckled, t_b, done, steps = c
-            stuck = model.is_stuck(q, v, t)
-            if freeze_stuck:
-                done = done | stuck
-            c = (q, v, a, t, D, buckled, t_b, done, steps)
-            return c, record(q, v, t, stuck, D)
+        def interval(s):
+            s = jax.lax.fori_loop(0, m, lambda _, s: self.advance(model, s, h, m, n_save, options), s)
+            return s, record(s)
 
-        c0 = (q0, v0, a0, t_, zero, jnp.array(False), jnp.asarray(jnp.inf, dtype), jnp.array(False),
-              jnp.array(0, jnp.int32))
-        stuck0 = model.is_stuck(q0, v0, t_)
-        if freeze_stuck:
-            c0 = c0[:7] + (stuck0,) + c0[8:]
-        rec0 = record(q0, v0, t_, stuck0, zero)
-
+        rec0 = record(s0)
         if options.early_exit:
             bufs = jax.tree_util.tree_map(
                 lambda x: jnp.zeros((n_save,) + x.shape, x.dtype).at[0].set(x), rec0
             )
 
             def cond(state):
-                i, c, _ = state
-                return (i < n_save - 1) & ~c[7]
+                i, s, _ = state
+                return (i < n_save - 1) & ~s.stopped
 
             def body(state):
-                i, c, bufs = state
-                c, rec = interval(c)
+                i, s, bufs = state
+                s, rec = interval(s)
                 bufs = jax.tree_util.tree_map(lambda b, x: b.at[i + 1].set(x), bufs, rec)
-                return i + 1, c, bufs
+                return i + 1, s, bufs
 
-            i_end, c, bufs = jax.lax.while_loop(cond, body, (jnp.array(0), c0, bufs))
+            i_end, s, bufs = jax.lax.while_loop(cond, body, (jnp.array(0), s0, bufs))
             later = jnp.arange(n_save) > i_end
-            bufs = jax.tree_util.tree_map(
+            recs = jax.tree_util.tree_map(
                 lambda b: jnp.where(
                     later.reshape((-1,) + (1,) * (b.ndim - 1)), b[i_end][None], b
                 ),
                 bufs,
             )
-            recs = bufs
         else:
-            c, recs = jax.lax.scan(lambda c, _: interval(c), c0, None, length=n_save - 1)
+            s, recs = jax.lax.scan(lambda s, _: interval(s), s0, None, length=n_save - 1)
             recs = jax.tree_util.tree_map(
                 lambda x0, xs: jnp.concatenate([x0[None], xs]), rec0, recs
             )
 
-        q, v, a, t, D, buckled, t_b, done, steps = c
         ts = jnp.linspace(0.0, t1, n_save, dtype=dtype)
-        finite = jnp.isfinite(q).all() & jnp.isfinite(v).all() & jnp.isfinite(recs["amplitude"]).all()
-        too_big = h >= self.step_limit(model)
-        result = jnp.where(
-            too_big,
-            RESULTS.step_limit,
-            jnp.where(finite, RESULTS.successful, RESULTS.nonfinite),
-        ).astype(jnp.int32)
         return Solution(
             ts=ts,
             q=recs.get("q"),
@@ -219,11 +271,25 @@ class AbstractFixedStep(AbstractIntegrator):
             amplitude=recs["amplitude"],
             energies=recs["energies"],
             dissipated=recs["dissipated"],
-            buckled=buckled,
-            t_buckle=t_b,
-            t_stop=jnp.where(done, t, ts[-1]),
-            q_final=q,
-            v_final=v,
-            result=result,
-            n_steps=steps,
+            buckled=s.buckled,
+            t_buckle=s.t_buckle,
+            t_stop=s.stop_time(t1, n_save),
+            q_final=s.q,
+            v_final=s.v,
+            result=self.result(model, s, h),
+            n_steps=s.steps,
         )
+
+    def result(self, model, s: RunState, h) -> Array:
+        """The [`jaxrod.RESULTS`][] code of a finished run."""
+        finite = jnp.isfinite(s.q).all() & jnp.isfinite(s.v).all()
+        return jnp.where(
+            h >= self.step_limit(model),
+            RESULTS.step_limit,
+            jnp.where(finite, RESULTS.successful, RESULTS.nonfinite),
+        ).astype(jnp.int32)
+
+
+def _freezes_stuck(model, options) -> bool:
+    """A stuck run is frozen only under a constant load (then nothing can release it)."""
+    return options.stop_when_stuck and model.autonomous

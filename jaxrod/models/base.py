@@ -68,10 +68,10 @@ class AbstractModel(eqx.Module):
         f_s, f_d = self.friction_bounds(t)
         return friction.acceleration(v, f_s, f_d)
 
-    def is_stuck(self, q, v, t) -> Bool[Array, ""]:
-        """Whether the whole system is at rest and held by static friction."""
+    def is_stuck(self, q, v, a, t) -> Bool[Array, ""]:
+        """Whether the whole system is at rest and held by static friction, given `a`, the
+        conservative acceleration at (q, t) (the integrators already hold it)."""
         f_s, _ = self.friction_bounds(t)
-        a = self.acceleration(q, t)
         return jnp.all(v == 0) & jnp.all(jnp.abs(a) <= f_s)
 
     def linear_flow(self, q, v, t, h):

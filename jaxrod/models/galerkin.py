@@ -130,9 +130,9 @@ class GalerkinModel(AbstractModel):
         f_s, f_d = self.friction_bounds(t)
         return self.project(friction.acceleration(self.field(v), f_s, f_d))
 
-    def is_stuck(self, q, v, t):
+    def is_stuck(self, q, v, a, t):
         f_s, _ = self.friction_bounds(t)
-        a = self.field(self.acceleration(q, t))
+        a = self.field(a)
         return jnp.all(v == 0) & jnp.all(jnp.abs(a) <= f_s)
 
     def amplitude(self, q):
