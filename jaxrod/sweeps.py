@@ -399,27 +399,35 @@ def _expand(inputs: Mapping[str, object], combine: str):
 
 
 def _static_resolution(spec: SweepSpec, flat: dict[str, np.ndarray]):
-    """n and dt from the concrete inputs: the largest load sets n, the stiffest valid member dt."""
+    """n and dt from the concrete inputs: the largest load sets n, the stiffest valid member dt.
+    Depends only on the spec, the distinct stiffness values and the largest ΔF, and is cached
+    on them (it evaluates the models eagerly: a few ms, much of a small sweep)."""
+    stiff = [f for f in _STIFFNESS_FIELDS if f in flat]
+    values = np.unique(np.stack([np.asarray(flat[f], float) for f in stiff], -1), axis=0) if stiff else None
+    dF = flat.get("dF", np.array([spec.dF]))
+    dF_max = float(np.nanmax(np.where(np.isfinite(dF), dF, -np.inf)))
+    key = None if values is None else tuple(map(tuple, values.tolist()))
+    return _resolution(json.dumps(spec.to_json(), sort_keys=True), tuple(stiff), key, dF_max)
+
+
+@functools.lru_cache(maxsize=64)
+def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
     import jax.numpy as jnp_
 
-    n_members = len(next(iter(flat.values())))
+    spec = SweepSpec(**json.loads(spec_json))
 
-    def rod_at(i):
-        vals = {f: float(flat[f][i]) for f in _STIFFNESS_FIELDS if f in flat}
+    def rod_of(row):
         try:
-            return RodChannel.reference(mu=spec.mu, **{**dict(spec.rod), **vals})
+            return RodChannel.reference(mu=spec.mu, **{**dict(spec.rod), **dict(zip(stiff, row))})
         except ValueError:
             return None
 
-    idx = np.arange(n_members)
-    if any(f in flat for f in _STIFFNESS_FIELDS):
-        rods = [r for r in (rod_at(i) for i in idx) if r is not None]
+    if values is not None:
+        rods = [r for r in map(rod_of, values) if r is not None]
     else:
         rods = [RodChannel.reference(mu=spec.mu, **spec.rod)]
     if not rods:
         raise ValueError("no member of the sweep has valid rod parameters.")
-    dF = flat.get("dF", np.array([spec.dF]))
-    dF_max = float(np.nanmax(np.where(np.isfinite(dF), dF, -np.inf)))
     n = spec.n
     if spec.model == "field" and n is None:
         n = max(default_nodes(r, theory.frictionless_load(r, theory.critical_mode(r)) + dF_max) for r in rods)

@@ -194,12 +194,12 @@ class AbstractFixedStep(AbstractIntegrator):
         h = jnp.where(frozen, jnp.zeros_like(h), h)
         q, v, a, dD = self.step(model, s.q, s.v, s.a, s.t, h)
         t = s.t + h
-        amp = model.amplitude(q)
+        amp, held = model.stop_measures(q, v, a, t)
         new_b = amp > options.threshold(model)
         k = s.k + 1
         at_save = k == m
         blown = new_b | ~jnp.isfinite(amp)  # a buckled or non-finite state is not held
-        stuck = jnp.where(at_save, model.is_stuck(q, v, a, t), s.stuck & ~blown)
+        stuck = jnp.where(at_save, held, s.stuck & ~blown)
         stopped = blown | (at_save & stuck & _freezes_stuck(model, options))
         keep = lambda old, new: jnp.where(frozen, old, new)
         return RunState(

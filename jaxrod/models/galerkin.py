@@ -130,10 +130,10 @@ class GalerkinModel(AbstractModel):
         f_s, f_d = self.friction_bounds(t)
         return self.project(friction.acceleration(self.field(v), f_s, f_d))
 
-    def is_stuck(self, q, v, a, t):
+    def stop_measures(self, q, v, a, t):
         f_s, _ = self.friction_bounds(t)
-        a = self.field(a)
-        return jnp.all(v == 0) & jnp.all(jnp.abs(a) <= f_s)
+        stuck = jnp.all(v == 0) & jnp.all(jnp.abs(self.field(a)) <= f_s)
+        return self.amplitude(q), stuck
 
     def amplitude(self, q):
         return jnp.max(jnp.abs(self.field(q)))
