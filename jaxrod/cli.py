@@ -230,8 +230,10 @@ def _simulate_rod3d(args, rod) -> int:
 
     from . import theory
     from ._results import RESULTS
-    from .rod3d import Rod3D, simulate_rod3d
-    from .rod3d.experiments import sine_velocity
+    from .integrators.base import save_grid
+    from .modal import dominant_mode
+    from .rod3d import Rod3D, sine_velocity, step_limit
+    from .rod3d.experiments import run
 
     if args.perturbation != "sine":
         _fail(f"argument --perturbation: {args.perturbation!r} is not available with --model rod3d; use 'sine'.")
@@ -242,25 +244,31 @@ def _simulate_rod3d(args, rod) -> int:
         _fail(f"argument --n: {n!r} is invalid: the 3D rod needs >= 4 segments.")
     F = float(theory.frictionless_load(rod, 6)) + args.dF if args.control != "displacement" else 0.0
     model = Rod3D(rod, n, control=args.control, speed=args.speed, end_load=F if args.control == "load" else 0.0)
-    s0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
+    q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
     n_save = min(args.n_save, 1001)
+    limit = step_limit(model, q0)
+    if args.dt is not None and not (0 < args.dt < limit):
+        _fail(f"argument --dt: {args.dt!r} s is invalid: the explicit step limit of this rod is {limit:.4g} s; "
+              f"use 0 < dt < {limit:.4g} s.")
+    dt = 0.5 * limit if args.dt is None else args.dt
     try:
-        sol = simulate_rod3d(model, s0, args.t1, n_save, dt=args.dt,
-                             stop_on_buckle=args.control != "displacement",
-                             stop_when_stuck=args.control != "displacement")
+        sol = run(model, q0, v0, args.t1, n_save, dt, stop_on_buckle=args.control != "displacement",
+                  stop_when_stuck=args.control != "displacement")
     except ValueError as err:
         _fail(str(err))
-    R = np.asarray(sol.reaction[:, 1])
+    R = np.asarray(sol.observables["reaction"][:, 1])
+    end_x = np.asarray(sol.observables["end_x"])
     i = int(np.argmax(R))
     out = {
         "model": "rod3d", "control": args.control, "n_segments": n, "perturbation": "sine",
         "amplitude": args.amplitude, "mu": args.mu, "dF": args.dF if args.control != "displacement" else None,
-        "F": F, "speed": args.speed if args.control == "displacement" else None, "dt": float(sol.dt), "t1": args.t1,
+        "F": F, "speed": args.speed if args.control == "displacement" else None,
+        "dt": save_grid(args.t1, n_save, dt)[1], "t1": args.t1,
         "buckled": bool(sol.buckled), "t_buckle": _json_number(sol.t_buckle),
         "max_theta": float(np.max(np.asarray(sol.amplitude))),
-        "dominant_mode": int(sol.dominant_mode()[-1]),
-        "peak_reaction": float(R[i]), "end_displacement_at_peak": float(sol.end_displacement[i]),
-        "twist_over_total_max": float(np.max(np.asarray(sol.energies["twist"] / sol.total_energy))),
+        "dominant_mode": int(dominant_mode(sol.observables["theta"][-1, 1:-1])),
+        "peak_reaction": float(R[i]), "end_displacement_at_peak": float(end_x[0] - end_x[i]),
+        "twist_over_total_max": float(np.max(np.asarray(sol.energies["twist"] / sum(sol.energies.values())))),
         "energy_balance_error": float(np.max(np.abs(np.asarray(sol.energy_balance)))),
         "result": RESULTS.describe(sol.result),
     }

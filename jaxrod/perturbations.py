@@ -178,8 +178,8 @@ class _Forced(AbstractModel):
     def friction_bounds(self, t):
         return self.inner.friction_bounds(t)
 
-    def friction_update(self, friction, v_trial, v_prev, h, t):
-        return self.inner.friction_update(friction, v_trial, v_prev, h, t)
+    def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
+        return self.inner.friction_update(friction, v_trial, v_prev, h, t, q, a)
 
     def friction_acceleration(self, friction, v, t):
         return self.inner.friction_acceleration(friction, v, t)

@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._results import RESULTS
-from .integrators.base import AbstractFixedStep, AbstractIntegrator, RunOptions
+from .integrators.base import AbstractFixedStep, AbstractIntegrator, RunOptions, as_state
 from .models.base import AbstractModel
 from .solution import Solution
 
@@ -56,16 +56,14 @@ def simulate(
         raise ValueError(f"n_save = {n_save!r} is invalid: expected an int >= 2.")
     if isinstance(integrator, AbstractFixedStep) and _is_concrete(model):
         with jax.ensure_compile_time_eval():  # concrete even inside a caller's jit
-            limit = np.asarray(integrator.step_limit(model))
+            limit = np.asarray(eqx.filter_jit(integrator.step_limit)(model))
         if np.any(integrator.dt >= limit):
             raise ValueError(
                 f"{type(integrator).__name__}.dt = {integrator.dt!r} s is above the stability "
                 f"limit 2/ω_max = {float(np.min(limit)):.4g} s for this model; use a smaller dt."
             )
     # Initial values become arrays so that new values never trigger a recompilation.
-    dtype = jnp.result_type(float)
-    q0 = jnp.asarray(q0, dtype=dtype)
-    v0 = jnp.asarray(v0, dtype=dtype)
+    q0, v0 = as_state(q0), as_state(v0)
     options = RunOptions() if options is None else options
     return _simulate(model, integrator, q0, v0, float(t1), n_save, options, throw)
 

@@ -23,7 +23,13 @@ class Solution(eqx.Module):
     - `amplitude`: the largest deflection max|θ| [rad] at `ts`, shape (n_save,).
     - `energies`: named energies at `ts` (kinetic and potential parts; J for the rod models),
       each of shape (n_save,).
-    - `dissipated`: energy dissipated by friction up to `ts`, shape (n_save,).
+    - `dissipated`: energy dissipated by friction (and, for the 3D rod, contact and viscous
+      damping) up to `ts`, shape (n_save,).
+    - `work_in`: work done on the system by driven boundaries up to `ts` (the 3D rod's pushed
+      end under displacement control; zero otherwise), shape (n_save,).
+    - `observables`: model-specific records at `ts` (empty for the reduced models; the 3D
+      rod's θ at every node, end reactions, wall and axial forces, ...: see
+      [`jaxrod.rod3d.Rod3D.observables`][]).
     - `buckled`: whether the amplitude passed the buckling threshold; `t_buckle` when it did
       [s] (`inf` if never).
     - `t_stop`: when the run stopped (buckled, stuck under a constant load, or `t1`) [s];
@@ -40,6 +46,8 @@ class Solution(eqx.Module):
     amplitude: Float[Array, " n_save"]
     energies: dict[str, Float[Array, " n_save"]]
     dissipated: Float[Array, " n_save"]
+    work_in: Float[Array, " n_save"]
+    observables: dict[str, Array]
     buckled: Bool[Array, ""]
     t_buckle: Float[Array, ""]
     t_stop: Float[Array, ""]
@@ -50,9 +58,15 @@ class Solution(eqx.Module):
 
     @property
     def total_energy(self) -> Float[Array, " n_save"]:
-        """Mechanical energy plus the energy dissipated by friction (constant if the balance
-        closes)."""
-        return sum(self.energies.values()) + self.dissipated
+        """Mechanical energy plus the energy dissipated, minus the work put in (constant if the
+        balance closes)."""
+        return sum(self.energies.values()) + self.dissipated - self.work_in
+
+    @property
+    def energy_balance(self) -> Float[Array, " n_save"]:
+        """E(t) + dissipated(t) − work_in(t) − E(0) [J]: zero for an exact scheme."""
+        total = self.total_energy
+        return total - total[..., :1]
 
     def energy_balance_error(self) -> Float[Array, ""]:
         """max |E(t) + D(t) − E(0)| over the saves, relative to the largest energy term seen."""

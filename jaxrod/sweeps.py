@@ -261,65 +261,42 @@ def _member_inputs(spec: SweepSpec, p, index, base_key):
     return ok, safe, dF, amp, jax.random.fold_in(base_key, index)
 
 
-def _rod3d_member(spec: SweepSpec, n: int, dt: float):
-    """The per-member function for the 3D rod: dead load F⁰_m* + ΔF, the perturbation as a
-    lateral velocity (sine, random-velocity) or offset (random-shape) of the n + 1 nodes; the run
-    stops when it buckles (max|θ| > threshold) or when every free node is stuck."""
-    from .rod3d.experiments import sine_velocity
-    from .rod3d.model import Rod3D
-    from .rod3d.run import _all_stuck, _run
-
-    n_save = 201
-    m, h = save_grid(spec.t1, n_save, dt)
-
-    def member(p, index, base_key):
-        ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
-        F = theory.frictionless_load(safe, theory.critical_mode(safe)) + dF
-        model = Rod3D(safe, n, control="load", end_load=F)
-        if spec.perturbation == "sine":
-            s0 = model.initial_state(F, lateral_velocity=sine_velocity(model, amp, spec.mode))
-        else:
-            u = jax.random.uniform(key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * amp
-            s0 = (model.initial_state(F, lateral_velocity=u) if spec.perturbation == "random-velocity"
-                  else model.initial_state(F, lateral_offset=u))  # random-shape
-        c, obs = _run(model, s0, jnp.asarray(h), m, n_save, spec.threshold, True, True)
-        state, buckled, t_buckle = c[0], c[4], c[5]
-        finite = jnp.all(jnp.isfinite(state.x))
-        result = jnp.where(ok, jnp.where(finite, RESULTS.successful, RESULTS.nonfinite), RESULTS.invalid_input)
-        result = result.astype(jnp.int32)
-        theta = model.theta(state.x)[1:-1]
-        return {
-            "buckled": buckled & (result == 0),
-            "t_buckle": t_buckle,
-            "dominant_mode": dominant_mode(theta).astype(jnp.int32),
-            "max_theta": jnp.max(obs["amplitude"]),
-            "final_theta": obs["amplitude"][-1],
-            "stuck": _all_stuck(model, state),
-            "t_stop": state.t,
-            "result": result,
-            "steps": c[6],
-        }
-
-    return member
-
-
 N_SAVE = 201  # the stick test runs at every save, so a stuck member stops within t1/200
 
 
-def _reduced_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
-    """A reduced-model member in three pure parts: `setup(params, index, base_key)` gives its
-    model and (q₀, v₀), the fixed-step engine runs it, `outputs(model, run, ok)` summarises."""
+def _rod3d_setup(spec: SweepSpec, n: int, safe, dF, amp, key):
+    """The 3D rod under the dead load F⁰_m* + ΔF, the perturbation as a lateral velocity (sine,
+    random-velocity) or offset (random-shape) of its n + 1 nodes."""
+    from .rod3d.model import Rod3D, sine_velocity
+
+    F = theory.frictionless_load(safe, theory.critical_mode(safe)) + dF
+    model = Rod3D(safe, n, control="load", end_load=F)
+    if spec.perturbation == "sine":
+        return model, *model.initial_state(F, lateral_velocity=sine_velocity(model, amp, spec.mode))
+    u = jax.random.uniform(key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * amp
+    if spec.perturbation == "random-velocity":
+        return model, *model.initial_state(F, lateral_velocity=u)
+    return model, *model.initial_state(F, lateral_offset=u)  # random-shape
+
+
+def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
+    """A member in three pure parts: `setup(params, index, base_key)` gives its model and its
+    [`RunState`][jaxrod.integrators.base.RunState] at t = 0, the fixed-step engine advances it
+    (`advance`, `finished`), `outputs(ok, model, run)` summarises it. Every model, 3D included."""
     integrator = ProjectedVerlet(dt)
     opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
     m, h = save_grid(spec.t1, N_SAVE, dt)
 
     def setup(p, index, base_key):
         ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
-        pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
-        scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
-                      grid_dt=grid_dt)
-        model = scene.model()
-        q0, v0 = scene.initial_state()
+        if spec.model == "rod3d":
+            model, q0, v0 = _rod3d_setup(spec, n, safe, dF, amp, key)
+        else:
+            pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
+            scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
+                          grid_dt=grid_dt)
+            model = scene.model()
+            q0, v0 = scene.initial_state()
         return ok, model, integrator.start(model, q0, v0, opts)
 
     def advance(model, run):
@@ -331,6 +308,8 @@ def _reduced_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     def outputs(ok, model, run):
         if spec.model == "field":
             dom = dominant_mode(run.q)
+        elif spec.model == "rod3d":
+            dom = dominant_mode(model.theta(run.q.x)[1:-1])
         elif spec.model == "galerkin":
             dom = jnp.argmax(jnp.abs(run.q)) + 1
         else:
@@ -355,9 +334,7 @@ def _reduced_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
 def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     """The pure per-member function `member(params, index, base_key) -> outputs` (one whole run:
     the "chunk" scheduling, and single runs)."""
-    if spec.model == "rod3d":
-        return _rod3d_member(spec, n, dt)
-    setup, advance, finished, outputs = _reduced_member(spec, n, dt, grid_dt)
+    setup, advance, finished, outputs = _engine_member(spec, n, dt, grid_dt)
 
     m, _ = save_grid(spec.t1, N_SAVE, dt)
 
@@ -445,15 +422,13 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
 def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
     """n (default 60 segments, E1/E6's) and dt: 0.5 of the smallest explicit limit over the
     rods at the largest load (a given `spec.dt` must lie below it)."""
-    from .rod3d.model import Rod3D
-    from .rod3d.run import step_limit
+    from .rod3d.model import Rod3D, step_limit
 
     n = spec.n or ROD3D_SEGMENTS
     limits = []
     for r in rods:
         F = float(theory.frictionless_load(r, theory.critical_mode(r))) + dF_max
-        model = Rod3D(r, n, control="load", end_load=F)
-        limits.append(step_limit(model, model.initial_state(F)))
+        limits.append(step_limit(Rod3D(r, n, control="load", end_load=F)))
     limit = min(limits)
     if spec.dt is not None and not (0 < spec.dt < limit):
         raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model 'rod3d': the explicit step limit "
@@ -543,7 +518,7 @@ def sweep(
       side by side and a lane whose member has stopped takes the next pending one every
       `refill_every` steps, inside one compiled loop ([`jaxrod.batching.run_pool`][]);
       `"chunk"`: the whole chunk vmapped at once, running until its slowest member stops
-      (kept for comparison; the 3D rod uses it). Results are identical either way.
+      (kept for comparison). Results are identical either way.
 
     **Returns:** a [`jaxrod.SweepResult`][].
 
@@ -575,8 +550,6 @@ def sweep(
     for name, val in (("lanes", lanes), ("refill_every", refill_every)):
         if not (isinstance(val, int) and val >= 1):
             raise ValueError(f"{name} = {val!r} is invalid: expected an int >= 1.")
-    if spec.model == "rod3d":
-        scheduling = "chunk"
     index = np.arange(members.start, members.stop)
     chunk_size = math.ceil(min(chunk_size, len(index)) / n_dev) * n_dev
     sel = {k: v[index] for k, v in flat.items()}
@@ -692,7 +665,7 @@ def _pool_runner(spec_json: str, n, dt, grid_dt, lanes: int, refill_every: int):
     """One jitted chunk function with continuous batching: every device sets up its share of
     the chunk's members, runs them in `lanes` lanes ([`jaxrod.batching.run_pool`][]) and
     summarises them. Also returns the lane steps computed per device (for the utilisation)."""
-    setup, advance, finished, outputs = _reduced_member(SweepSpec(**json.loads(spec_json)), n, dt, grid_dt)
+    setup, advance, finished, outputs = _engine_member(SweepSpec(**json.loads(spec_json)), n, dt, grid_dt)
     mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()), ("batch",))
     P = jax.sharding.PartitionSpec
 

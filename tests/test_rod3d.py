@@ -6,8 +6,16 @@ import numpy as np
 import pytest
 
 import jaxrod as jr
-from jaxrod.rod3d import Rod3D, simulate_rod3d, step_limit
+from jaxrod.rod3d import Rod3D, step_limit
 from jaxrod.rod3d.so3 import exp_so3, log_so3
+
+
+def simulate_rod3d(model, state, t1, n_save, *, dt=None, dt_fraction=0.5, law=jr.Coulomb(), **options):
+    """The 3D rod through the one `jaxrod.simulate`, with its step `dt_fraction` of the
+    explicit limit at the initial state (as the experiments)."""
+    dt = dt_fraction * step_limit(model, state[0]) if dt is None else dt
+    opts = jr.RunOptions(**{"stop_when_stuck": False, **options})
+    return jr.simulate(model, jr.ProjectedVerlet(dt, law), *state, t1, n_save=n_save, options=opts, throw=False)
 
 
 def test_so3_roundtrip_and_finite_gradients_at_identity():
@@ -26,11 +34,11 @@ def test_static_sag_of_a_simply_supported_rod_matches_beam_theory():
     rod = jr.RodChannel.reference(0.0, L=0.3)
     m = Rod3D(rod, 20, channel=False, control="load", damping=300.0)
     sol = simulate_rod3d(m, m.initial_state(), 0.12, 5, save_state=True)
-    sag = -float(sol.x[-1, 10, 2])
+    sag = -float(sol.q.x[-1, 10, 2])
     theory = 5 * float(rod.w) * 0.3**4 / (384 * float(rod.EI)) + float(rod.w) * 0.3**2 / (8 * float(m.shear_coefficient * rod.GA))
     assert abs(sag / theory - 1) < 0.01, (sag, theory)
     # settled: the last two saves (30 ms apart) agree to 1e-3 relative
-    assert abs(float(sol.x[-2, 10, 2]) / float(sol.x[-1, 10, 2]) - 1) < 1e-3
+    assert abs(float(sol.q.x[-2, 10, 2]) / float(sol.q.x[-1, 10, 2]) - 1) < 1e-3
 
 
 def test_planar_euler_load_from_the_frequency_drop():
@@ -43,7 +51,7 @@ def test_planar_euler_load_from_the_frequency_drop():
     for F in (0.0, 0.5 * PE):
         m = Rod3D(rod, 16, channel=False, gravity=False, control="load", end_load=F)
         sol = simulate_rod3d(m, m.initial_state(F, lateral_velocity=1e-4 * np.sin(np.pi * s)), 0.05, 501, save_state=True)
-        y, ts = np.asarray(sol.x[:, 8, 1]), np.asarray(sol.ts)
+        y, ts = np.asarray(sol.q.x[:, 8, 1]), np.asarray(sol.ts)
         i = np.where((y[1:-1] > 0) & (y[2:] <= 0))[0][0] + 1
         om.append(np.pi / (ts[i] + (ts[i + 1] - ts[i]) * y[i] / (y[i] - y[i + 1])))
     om1_theory = (np.pi / 0.3) ** 2 * np.sqrt(float(rod.EI) / float(rod.rho))
@@ -82,10 +90,10 @@ def test_static_friction_holds_and_dynamic_friction_sets_the_deceleration():
         m = Rod3D(rod, 20, ends="free", body_force=(ratio * w, 0.0, 0.0))
         s0 = m.initial_state()
         sol = simulate_rod3d(m, s0, 0.02, 3, save_state=True)
-        dx = np.asarray(sol.x[-1, :, 0] - s0.x[:, 0])
+        dx = np.asarray(sol.q.x[-1, :, 0] - s0[0].x[:, 0])
         if ratio < 0.5:
             assert np.max(np.abs(dx)) < 1e-9
-            assert bool(np.all(sol.final.stuck))
+            assert bool(np.all(sol.v_final.stuck))
         else:
             expected = 0.5 * (ratio - 0.3) * 9.81 * 0.02**2
             np.testing.assert_allclose(dx, expected, rtol=1e-4)
@@ -94,12 +102,14 @@ def test_static_friction_holds_and_dynamic_friction_sets_the_deceleration():
 def test_a_step_above_the_limit_is_refused():
     m = Rod3D(jr.RodChannel.reference(0.3), 10)
     s0 = m.initial_state(2.0)
-    lim = step_limit(m, s0)
+    lim = step_limit(m, s0[0])
     # the limit is set by the axial wave: within 30 % of l̂/c
     c = np.sqrt(77e9 / 6450)
     assert 0.7 < lim / (0.3 / c) < 1.3
+    # the same limit for the straight rod under its end load (what `simulate` checks)
+    assert abs(step_limit(m) / lim - 1) < 0.05
     with pytest.raises(ValueError, match="dt"):
-        simulate_rod3d(m, s0, 0.001, 3, dt=1.01 * lim)
+        simulate_rod3d(m, s0, 0.001, 3, dt=1.01 * step_limit(m))
 
 
 def test_bad_arguments_name_the_argument():
@@ -133,8 +143,9 @@ def test_a_compressed_rod_inside_the_friction_cone_holds_with_centre_line_fricti
     s = jnp.linspace(0.0, 1.0, 31)
     s0 = m.initial_state(F, lateral_offset=R * A * jnp.sin(12 * jnp.pi * s))
     sol = simulate_rod3d(m, s0, 0.02, 3, stop_on_buckle=False)
-    assert np.max(np.abs(np.asarray(sol.theta[-1] - sol.theta[0]))) < 1e-12
-    assert bool(jnp.all(sol.final.stuck[1:-1]))
+    theta = np.asarray(sol.observables["theta"])
+    assert np.max(np.abs(theta[-1] - theta[0])) < 1e-12
+    assert bool(jnp.all(sol.v_final.stuck[1:-1]))
 
 
 @pytest.mark.parametrize("law", [jr.Coulomb(), jr.Tanh(1e-3)])
@@ -142,15 +153,37 @@ def test_gradients_are_finite_at_zero_slip(law):
     """d(final state)/d(perturbation amplitude) (forward mode) through a short run that starts at rest
     (zero slip everywhere) is finite for the sharp and the smooth law."""
     rod = jr.RodChannel.reference(0.3)
-    m = Rod3D(rod, 8, friction=law)
+    m = Rod3D(rod, 8)
     s = jnp.linspace(0.0, 1.0, 9)
-    from jaxrod.rod3d.run import _run
 
     def f(a):
         s0 = m.initial_state(2.0, lateral_velocity=a * jnp.sin(2 * jnp.pi * s))
-        c, obs = _run(m, s0, 2e-5, 10, 3, 0.5, False)
-        return c[0].v[4, 1] + obs["dissipated"][-1]
+        sol = simulate_rod3d(m, s0, 4e-4, 3, dt=2e-5, law=law, stop_on_buckle=False)
+        return sol.v_final.v[4, 1] + sol.dissipated[-1]
 
     g0 = jax.jvp(f, (0.0,), (1.0,))[1]
     g1 = jax.jvp(f, (0.01,), (1.0,))[1]
     assert np.isfinite(g0) and np.isfinite(g1)
+
+
+def test_the_3d_rod_runs_through_simulate_under_jit_and_vmap():
+    """One engine: a vmapped, jitted batch of 3D runs equals the single runs, member by member."""
+    rod = jr.RodChannel.reference(0.3)
+    F = float(jr.theory.frictionless_load(rod, 6)) + 5.0
+    m = Rod3D(rod, 10, control="load", end_load=F)
+    dt = 0.5 * step_limit(m)
+    amps = jnp.array([2e-3, 0.08])
+    states = jax.vmap(lambda a: m.initial_state(F, lateral_velocity=jr.rod3d.sine_velocity(m, a)))(amps)
+
+    @jax.jit
+    def batch(q, v):
+        return jax.vmap(lambda q, v: jr.simulate(m, jr.ProjectedVerlet(dt), q, v, 0.03, n_save=31, throw=False))(q, v)
+
+    sols = batch(*states)
+    for i in range(2):
+        one = simulate_rod3d(m, m.initial_state(F, lateral_velocity=jr.rod3d.sine_velocity(m, amps[i])), 0.03, 31,
+                             dt=dt, stop_when_stuck=True)
+        assert bool(sols.buckled[i]) == bool(one.buckled)
+        np.testing.assert_allclose(sols.amplitude[i], one.amplitude, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(sols.t_stop[i], one.t_stop, rtol=1e-12)
+    assert not bool(sols.buckled[0]) and bool(sols.buckled[1])

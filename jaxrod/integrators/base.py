@@ -20,8 +20,10 @@ __all__ = ["AbstractIntegrator", "AbstractFixedStep", "RunOptions", "RunState"]
 class RunOptions(eqx.Module):
     """How a run stops and what it keeps (all static).
 
-    - `buckle_threshold`: amplitude [rad] past which the run counts as buckled and the state is
-      frozen (`None`: the model's default, 0.5 rad for the rod models, `inf` for one mode).
+    - `buckle_threshold`: amplitude [rad] past which the run counts as buckled (`None`: the
+      model's default, 0.5 rad for the rod models, `inf` for one mode).
+    - `stop_on_buckle`: freeze the state once it has buckled (otherwise the run goes on, and
+      `buckled`, `t_buckle` record the first crossing).
     - `stop_when_stuck`: freeze the state once the whole system is stuck under a constant load
       (exact for the sharp law: nothing can release it).
     - `early_exit`: leave the time loop as soon as the run (every member of a batch) has
@@ -31,6 +33,7 @@ class RunOptions(eqx.Module):
     """
 
     buckle_threshold: float | None = eqx.field(static=True, default=None)
+    stop_on_buckle: bool = eqx.field(static=True, default=True)
     stop_when_stuck: bool = eqx.field(static=True, default=True)
     early_exit: bool = eqx.field(static=True, default=True)
     save_state: bool = eqx.field(static=True, default=True)
@@ -77,7 +80,7 @@ def summarize(model, ts, qs, vs, dissipated, options, n_steps, extra_bad=False):
     thr = options.threshold(model)
     amp = jax.vmap(model.amplitude)(qs)
     energies = jax.vmap(model.energy_terms)(qs, vs, ts)
-    accs = jax.vmap(model.acceleration)(qs, ts)
+    accs = jax.vmap(model.accelerations)(qs, vs, ts)
     stuck = jax.vmap(model.is_stuck)(qs, vs, accs, ts)
     over = amp > thr
     buckled = jnp.any(over)
@@ -95,6 +98,8 @@ def summarize(model, ts, qs, vs, dissipated, options, n_steps, extra_bad=False):
         amplitude=amp,
         energies=energies,
         dissipated=dissipated,
+        work_in=jnp.zeros_like(dissipated),
+        observables={},
         buckled=buckled,
         t_buckle=t_buckle,
         t_stop=jnp.where(buckled, t_buckle, ts[-1]),
@@ -112,9 +117,10 @@ class RunState(eqx.Module):
     continuous-batching pool of the sweeps (many runs in lanes), one step at a time, so a sweep
     member takes exactly the steps of its single run.
 
-    **Fields:** `q`, `v` (the model's coordinates and velocities), `a` (the conservative
-    acceleration at (q, t)), `t` [s], `dissipated` (energy removed by friction, per degree
-    of freedom: its sum is the total),
+    **Fields:** `q`, `v` (the model's coordinates and velocities, arrays or pytrees), `a`
+    (`model.accelerations` at (q, v, t)), `t` [s], `dissipated` (energy removed by friction and
+    damping, per degree of freedom: the sum of its leaves is the total), `work_in` (work done by
+    driven boundaries [J]),
     `buckled`, `t_buckle` [s] (`inf` if not), `stuck` (at the last save), `stopped` (buckled,
     stuck under a constant load, or non-finite: frozen before the horizon), `steps` (taken),
     `k` (steps since the last save), `saves` (save intervals completed), `amp_max` (largest
@@ -126,6 +132,7 @@ class RunState(eqx.Module):
     a: Array
     t: Array
     dissipated: Array
+    work_in: Array
     buckled: Array
     t_buckle: Array
     stuck: Array
@@ -158,10 +165,10 @@ class AbstractFixedStep(AbstractIntegrator):
 
     @abc.abstractmethod
     def step(self, model: AbstractModel, q, v, a, t, h):
-        """One step of size `h` from (q, v) at time t, with `a` = the conservative acceleration
-        at (q, t) (reused across steps). Returns `(q, v, a, dissipated)` at t + h, where
-        `dissipated` is the energy friction removed during the step per degree of freedom
-        (shape of `v`; see `friction_work`)."""
+        """One step of size `h` from (q, v) at time t, with `a` = `model.accelerations` at
+        (q, t) (reused across steps). Returns `(q, v, a, (lost, work_in))` at t + h: the energy
+        friction (and damping) removed during the step per degree of freedom (the structure of
+        `v`; see `friction_work`) and the work done by driven boundaries [J]."""
 
     def step_limit(self, model):
         om = model.max_frequency()
@@ -170,14 +177,14 @@ class AbstractFixedStep(AbstractIntegrator):
     def start(self, model: AbstractModel, q0, v0, options: RunOptions) -> RunState:
         """The [`RunState`][] at t = 0 (stuck at once if the initial state is held)."""
         dtype = jnp.result_type(float)
-        q0 = jnp.asarray(q0, dtype=dtype)
-        v0 = jnp.asarray(v0, dtype=dtype)
+        q0, v0 = as_state(q0), as_state(v0)
         t = jnp.zeros((), dtype)
-        a = model.acceleration(q0, t)
+        a = model.accelerations(q0, v0, t)
         stuck = model.is_stuck(q0, v0, a, t)
+        lost = jax.eval_shape(lambda: model.impulse_work(v0, v0, v0, a, t)[0])
         return RunState(
-            q=q0, v=v0, a=a, t=t, dissipated=jnp.zeros_like(v0),
-            buckled=jnp.array(False), t_buckle=jnp.asarray(jnp.inf, dtype), stuck=stuck,
+            q=q0, v=v0, a=a, t=t, dissipated=jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype), lost),
+            work_in=jnp.zeros((), dtype), buckled=jnp.array(False), t_buckle=jnp.asarray(jnp.inf, dtype), stuck=stuck,
             stopped=stuck & _freezes_stuck(model, options),
             steps=jnp.array(0, jnp.int32), k=jnp.array(0, jnp.int32),
             saves=jnp.array(0, jnp.int32), amp_max=model.amplitude(q0),
@@ -192,19 +199,21 @@ class AbstractFixedStep(AbstractIntegrator):
         selecting between old and new arrays), and its bookkeeping is kept."""
         frozen = s.finished(n_save)
         h = jnp.where(frozen, jnp.zeros_like(h), h)
-        q, v, a, dD = self.step(model, s.q, s.v, s.a, s.t, h)
+        q, v, a, (lost, work) = self.step(model, s.q, s.v, s.a, s.t, h)
         t = s.t + h
         amp, held = model.stop_measures(q, v, a, t)
-        new_b = amp > options.threshold(model)
+        over = amp > options.threshold(model)
+        first = over & ~s.buckled
         k = s.k + 1
         at_save = k == m
-        blown = new_b | ~jnp.isfinite(amp)  # a buckled or non-finite state is not held
-        stuck = jnp.where(at_save, held, s.stuck & ~blown)
+        blown = (over & options.stop_on_buckle) | ~jnp.isfinite(amp)
+        stuck = jnp.where(at_save, held, s.stuck & ~blown & ~over)  # a buckled state is not held
         stopped = blown | (at_save & stuck & _freezes_stuck(model, options))
         keep = lambda old, new: jnp.where(frozen, old, new)
         return RunState(
-            q=q, v=v, a=a, t=t, dissipated=s.dissipated + dD,
-            buckled=keep(s.buckled, new_b), t_buckle=keep(s.t_buckle, jnp.where(new_b, t, s.t_buckle)),
+            q=q, v=v, a=a, t=t, dissipated=jax.tree_util.tree_map(jnp.add, s.dissipated, lost),
+            work_in=s.work_in + work,
+            buckled=keep(s.buckled, s.buckled | over), t_buckle=keep(s.t_buckle, jnp.where(first, t, s.t_buckle)),
             stuck=keep(s.stuck, stuck), stopped=keep(s.stopped, stopped),
             steps=keep(s.steps, s.steps + 1), k=keep(s.k, jnp.where(at_save, 0, k)),
             saves=keep(s.saves, s.saves + at_save.astype(s.saves.dtype)),
@@ -220,9 +229,11 @@ class AbstractFixedStep(AbstractIntegrator):
         def record(s):
             rec = {
                 "stuck": s.stuck,
-                "dissipated": jnp.sum(s.dissipated),
+                "dissipated": sum(jnp.sum(x) for x in jax.tree_util.tree_leaves(s.dissipated)),
+                "work_in": s.work_in,
                 "amplitude": model.amplitude(s.q),
                 "energies": model.energy_terms(s.q, s.v, s.t),
+                "observables": model.observables(s.q, s.v, s.a, s.t),
             }
             if options.save_state:
                 rec["q"], rec["v"] = s.q, s.v
@@ -271,6 +282,8 @@ class AbstractFixedStep(AbstractIntegrator):
             amplitude=recs["amplitude"],
             energies=recs["energies"],
             dissipated=recs["dissipated"],
+            work_in=recs["work_in"],
+            observables=recs["observables"],
             buckled=s.buckled,
             t_buckle=s.t_buckle,
             t_stop=s.stop_time(t1, n_save),
@@ -282,12 +295,29 @@ class AbstractFixedStep(AbstractIntegrator):
 
     def result(self, model, s: RunState, h) -> Array:
         """The [`jaxrod.RESULTS`][] code of a finished run."""
-        finite = jnp.isfinite(s.q).all() & jnp.isfinite(s.v).all()
+        finite = _all_finite((s.q, s.v))
         return jnp.where(
             h >= self.step_limit(model),
             RESULTS.step_limit,
             jnp.where(finite, RESULTS.successful, RESULTS.nonfinite),
         ).astype(jnp.int32)
+
+
+def as_state(tree):
+    """A state (array or pytree) with every non-boolean leaf a float array of the default
+    dtype, so that new initial values never trigger a recompilation."""
+    dtype = jnp.result_type(float)
+
+    def leaf(x):
+        x = jnp.asarray(x)
+        return x if x.dtype == bool else x.astype(dtype)
+
+    return jax.tree_util.tree_map(leaf, tree)
+
+
+def _all_finite(tree):
+    leaves = [x for x in jax.tree_util.tree_leaves(tree) if jnp.issubdtype(x.dtype, jnp.inexact)]
+    return jnp.all(jnp.stack([jnp.isfinite(x).all() for x in leaves]))
 
 
 def _freezes_stuck(model, options) -> bool:

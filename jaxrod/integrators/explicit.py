@@ -37,7 +37,7 @@ class SymplecticEuler(AbstractFixedStep):
         lost = friction_work(model, v, v_cons, v_new)
         v = v_new
         q = q + h * v
-        return q, v, model.acceleration(q, t + h), lost
+        return q, v, model.acceleration(q, t + h), (lost, jnp.zeros_like(h))
 
 
 class SplitLinearFriction(AbstractFixedStep):
@@ -71,4 +71,4 @@ class SplitLinearFriction(AbstractFixedStep):
         q1, v_lin = model.linear_flow(q, v, t, h)
         v1 = model.friction_update(self.friction, v_lin, v, h, t + h)
         lost = friction_work(model, v, v_lin, v1)
-        return q1, v1, a, lost
+        return q1, v1, a, (lost, jnp.zeros_like(h))

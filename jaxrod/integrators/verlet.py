@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import equinox as eqx
+import jax
+import jax.numpy as jnp
 
 from ..friction import AbstractFriction, Coulomb
-from .base import AbstractFixedStep, friction_work
+from .base import AbstractFixedStep
 
 __all__ = ["ProjectedVerlet"]
 
@@ -38,13 +40,13 @@ class ProjectedVerlet(AbstractFixedStep):
 
     def step(self, model, q, v, a, t, h):
         half = 0.5 * h
-        v_trial = v + half * a
-        v_half = model.friction_update(self.friction, v_trial, v, half, t)
-        lost = friction_work(model, v, v_trial, v_half)
-        q = q + h * v_half
+        v_trial = model.kick(q, v, a, half)
+        v_half = model.friction_update(self.friction, v_trial, v, half, t, q, a)
+        lost, work_in = model.impulse_work(v, v_trial, v_half, a, half)
+        q = model.drift(q, v_half, h)
         t1 = t + h
-        a = model.acceleration(q, t1)
-        v_trial = v_half + half * a
-        v = model.friction_update(self.friction, v_trial, v_half, half, t1)
-        lost = lost + friction_work(model, v_half, v_trial, v)
-        return q, v, a, lost
+        a = model.accelerations(q, v_half, t1)
+        v_trial = model.kick(q, v_half, a, half)
+        v = model.friction_update(self.friction, v_trial, v_half, half, t1, q, a)
+        lost2, work2 = model.impulse_work(v_half, v_trial, v, a, half)
+        return q, v, a, (jax.tree_util.tree_map(jnp.add, lost, lost2), work_in + work2)

@@ -58,10 +58,39 @@ class AbstractModel(eqx.Module):
         """The largest deflection of the state (rad)."""
         return jnp.max(jnp.abs(q))
 
-    def friction_update(self, friction, v_trial, v_prev, h, t):
-        """Velocity after the friction impulse of a step `h` (per-DOF law)."""
+    # -- the pieces of a step (kick → prox → drift → kick → prox); per-DOF defaults -----------
+
+    def accelerations(self, q, v, t):
+        """What a kick needs at (q, t) with velocities `v` (the integrators hold it as `a`):
+        the conservative acceleration for the per-DOF models (a model with velocity-dependent
+        forces, such as the 3D rod's contact damping, returns more)."""
+        return self.acceleration(q, t)
+
+    def kick(self, q, v, a, h):
+        """Velocities after a kick of `h` [s] with `a` (no friction)."""
+        return v + h * a
+
+    def drift(self, q, v, h):
+        """Coordinates after moving `h` [s] with the velocities `v`."""
+        return q + h * v
+
+    def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
+        """Velocity after the friction impulse of a step `h` (per-DOF law; `q` and `a`, the
+        state the impulse acts at, are used by models whose friction depends on them)."""
         f_s, f_d = self.friction_bounds(t)
         return friction.update(v_trial, v_prev, h, f_s, f_d)
+
+    def impulse_work(self, v_prev, v_trial, v_after, a, h):
+        """`(lost, work_in)` over a half step `h`: the energy friction (and any damping)
+        removed, per degree of freedom (see `friction_work`), and the work done on the system
+        by driven boundaries [J] (none here)."""
+        from ..integrators.base import friction_work
+
+        return friction_work(self, v_prev, v_trial, v_after), jnp.zeros((), jnp.result_type(float))
+
+    def observables(self, q, v, a, t) -> dict:
+        """Model-specific quantities recorded at every save (none for the reduced models)."""
+        return {}
 
     def friction_acceleration(self, friction, v, t):
         """The friction acceleration opposing `v`, for ODE solvers (per-DOF law)."""

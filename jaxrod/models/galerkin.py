@@ -121,7 +121,7 @@ class GalerkinModel(AbstractModel):
         scale = r.N / (r.rho * r.R)
         return r.mu_s * scale, r.mu_d * scale
 
-    def friction_update(self, friction, v_trial, v_prev, h, t):
+    def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
         f_s, f_d = self.friction_bounds(t)
         u = friction.update(self.field(v_trial), self.field(v_prev), h, f_s, f_d)
         return self.project(u)

@@ -13,12 +13,13 @@ import numpy as np
 
 from .. import theory
 from ..params import RodChannel
-from .model import Rod3D
-from .run import _run, simulate_rod3d, step_limit
-from ..integrators.base import save_grid
+from ..integrators import ProjectedVerlet
+from ..integrators.base import RunOptions
 from ..reproduce import _plt, _write_csv
+from ..simulate import simulate
+from .model import Rod3D, sine_velocity, step_limit
 
-__all__ = ["sine_velocity", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "rolling_check", "SIZES"]
+__all__ = ["run", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "rolling_check", "SIZES"]
 
 SIZES = {
     "tiny": dict(n=12, v0s=(10e-3, 30e-3), conv=(12,), t1=0.4, n_save=201, dFs=(), n_cross=12),
@@ -28,17 +29,22 @@ SIZES = {
 }
 
 
-def sine_velocity(model: Rod3D, v0, mode: int = 6):
-    """Lateral speed v₀ sin(mπs/L) at the n + 1 nodes [m/s]."""
-    s = jnp.arange(model.n + 1) / model.n
-    return jnp.asarray(v0) * jnp.sin(mode * jnp.pi * s)
+def run(model, q0, v0, t1, n_save, dt, *, threshold=0.5, stop_on_buckle=True, stop_when_stuck=False,
+        save_state=False):
+    """One [`jaxrod.simulate`][] run of the 3D rod with projected Verlet (vmap it for a batch)."""
+    opts = RunOptions(buckle_threshold=threshold, stop_on_buckle=stop_on_buckle,
+                      stop_when_stuck=stop_when_stuck, save_state=save_state)
+    return simulate(model, ProjectedVerlet(float(dt)), q0, v0, t1, n_save=n_save, options=opts, throw=False)
 
 
 def _batched(model, states, t1, n_save, dt, threshold, stop_on_buckle=True, stop_when_stuck=False):
-    m, h = save_grid(t1, n_save, dt)
-    run = jax.vmap(lambda s0: _run(model, s0, jnp.asarray(h), m, n_save, threshold, stop_on_buckle, stop_when_stuck))
-    c, obs = run(states)
-    return c, obs, h
+    """A vmapped batch of runs from the batched initial states `(q0s, v0s)`."""
+    return jax.vmap(lambda q, v: run(model, q, v, t1, n_save, dt, threshold=threshold, stop_on_buckle=stop_on_buckle,
+                                     stop_when_stuck=stop_when_stuck))(*states)
+
+
+def _first(states):
+    return jax.tree_util.tree_map(lambda a: a[0], states[0])
 
 
 def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fraction=0.5):
@@ -54,12 +60,13 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fracti
     rod = RodChannel.reference(mu) if rod is None else rod
     model = Rod3D(rod, n, control="displacement", speed=speed)
     states = jax.vmap(lambda v0: model.initial_state(0.0, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
-    dt = dt_fraction * step_limit(model, jax.tree_util.tree_map(lambda a: a[0], states))
-    c, obs, h = _batched(model, states, t1, n_save, dt, 1.0)
+    dt = dt_fraction * step_limit(model, _first(states))
+    sol = _batched(model, states, t1, n_save, dt, 1.0)
     ts = np.linspace(0.0, t1, n_save)
-    R = np.asarray(obs["reaction"][..., 1])
-    D = np.asarray(obs["end_displacement"])
-    buckled = np.asarray(c[4])
+    R = np.asarray(sol.observables["reaction"][..., 1])
+    end_x = np.asarray(sol.observables["end_x"])
+    D = end_x[:, :1] - end_x
+    buckled = np.asarray(sol.buckled)
     # the critical force: the peak where the linear response first breaks down, i.e. the
     # running maximum at the first save where the reaction has fallen 10 % below it (later
     # peaks of a frictionless rod slapping in the channel are post-buckling dynamics)
@@ -68,9 +75,14 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fracti
     first = np.where(broke.any(1), np.argmax(broke, axis=1), R.shape[1] - 1)
     i = np.array([int(np.argmax(R[k, : first[k] + 1])) for k in range(len(v0s))])
     return dict(ts=ts, displacement=D, reaction=R, critical_force=R[np.arange(len(v0s)), i],
-                d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=h, steps=np.asarray(c[6]),
-                balance=np.asarray(jnp.max(jnp.abs(sum(obs["energies"].values()) + obs["dissipated"] - obs["work_in"]
-                                                   - sum(obs["energies"].values())[:, :1]), axis=1)))
+                d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=_used_step(t1, n_save, dt),
+                steps=np.asarray(sol.n_steps), balance=np.asarray(jnp.max(jnp.abs(sol.energy_balance), axis=1)))
+
+
+def _used_step(t1, n_save, dt) -> float:
+    from ..integrators.base import save_grid
+
+    return save_grid(t1, n_save, dt)[1]
 
 
 def e1(out, quick=False, progress=True):
@@ -134,10 +146,10 @@ def e6_full(out, quick=False, progress=True):
     F0 = float(theory.frictionless_load(rod, 6))
     F0cr = float(theory.critical_load_continuous(rod))
     model = Rod3D(rod, n)
-    s0 = model.initial_state(F0 + 5.0, lateral_velocity=sine_velocity(model, 35e-3))
+    q0, v0 = model.initial_state(F0 + 5.0, lateral_velocity=sine_velocity(model, 35e-3))
     if progress:
         print(f"  E6 (full model): {n} segments, 0.1 s", flush=True)
-    sol = simulate_rod3d(model, s0, 0.1, 201, stop_on_buckle=False)
+    sol = run(model, q0, v0, 0.1, 201, 0.5 * step_limit(model, q0), stop_on_buckle=False)
     ts = np.asarray(sol.ts)
     E = {k: np.asarray(v) for k, v in sol.energies.items()}
     total = sum(E.values())
@@ -145,9 +157,9 @@ def e6_full(out, quick=False, progress=True):
     amp = np.asarray(sol.amplitude)
     i_b = int(np.argmax(amp > 0.1)) if np.any(amp > 0.1) else len(ts)
     pre = slice(1, max(i_b, 2))
-    Nn = np.asarray(sol.normal_force)[:, 1:-1] / float(rod.w)
-    Fx = np.asarray(sol.axial_force)
-    theta = np.asarray(sol.theta)[:, 1:-1]
+    Nn = np.asarray(sol.observables["normal_force"])[:, 1:-1] / float(rod.w)
+    Fx = np.asarray(sol.observables["axial_force"])
+    theta = np.asarray(sol.observables["theta"])[:, 1:-1]
     nm = min(40, n - 1)
     p_before = np.asarray(modal_spectrum(theta[1], nm))
     p_after = np.asarray(modal_spectrum(theta[min(i_b + 10, len(ts) - 1)], nm))
@@ -159,7 +171,7 @@ def e6_full(out, quick=False, progress=True):
         "normal_force_over_w_before": [float(Nn[pre].min()), float(Nn[pre].max())],
         "axial_force_variation_before_over_F0cr": float(np.max(Fx[pre].max(1) - Fx[pre].min(1)) / F0cr),
         "axial_force_mean_before": float(Fx[pre].mean()),
-        "max_lift_off_gap_over_R": float(np.max(np.asarray(sol.gap)) / float(rod.R)),
+        "max_lift_off_gap_over_R": float(np.max(np.asarray(sol.observables["gap"])) / float(rod.R)),
         "max_theta": float(np.max(amp)),
         "dominant_mode_before": int(np.argmax(p_before)) + 1,
         "dominant_mode_after": int(np.argmax(p_after)) + 1,
@@ -192,7 +204,8 @@ def e6_full(out, quick=False, progress=True):
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e6_full_model.png"), dpi=130)
     plt.close(fig)
-    rows = [dict(t=t, **{k: E[k][i] for k in E}, gap=float(sol.gap[i]), amplitude=amp[i]) for i, t in enumerate(ts)]
+    gap = np.asarray(sol.observables["gap"])
+    rows = [dict(t=t, **{k: E[k][i] for k in E}, gap=float(gap[i]), amplitude=amp[i]) for i, t in enumerate(ts)]
     _write_csv(os.path.join(out, "e6_full_model.csv"), rows)
     return res
 
@@ -225,9 +238,8 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
         for k in range(rounds):
             v0s = np.geomspace(lo, hi, grid)
             states = jax.vmap(lambda v0: model.initial_state(F0 + dF, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
-            dt = 0.5 * step_limit(model, jax.tree_util.tree_map(lambda a: a[0], states))
-            c, _, _ = _batched(model, states, t1, 11, dt, 0.5, True, True)
-            b = np.asarray(c[4])
+            dt = 0.5 * step_limit(model, _first(states))
+            b = np.asarray(_batched(model, states, t1, 11, dt, 0.5, True, True).buckled)
             tested.update(zip(v0s.tolist(), b.tolist()))
             if progress:
                 print(f"  cross-check ΔF = {dF} N ({friction_at}), round {k}: buckled {b.astype(int).tolist()}", flush=True)
@@ -282,9 +294,9 @@ def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps
     for where in ("surface", "axis"):
         for sw in sweeps:
             model = Rod3D(rod, n, control="load", end_load=F, friction_at=where, friction_sweeps=sw)
-            s0 = model.initial_state(F, lateral_offset=R * amplitude * jnp.sin(mode * jnp.pi * s))
-            sol = simulate_rod3d(model, s0, t1, 3, stop_on_buckle=False)
-            d = np.asarray(sol.theta[-1] - sol.theta[0])[1:-1]
+            q0, v0 = model.initial_state(F, lateral_offset=R * amplitude * jnp.sin(mode * jnp.pi * s))
+            sol = run(model, q0, v0, t1, 3, 0.5 * step_limit(model, q0), stop_on_buckle=False)
+            d = np.asarray(sol.observables["theta"][-1] - sol.observables["theta"][0])[1:-1]
             res[f"{where}, {sw} sweeps"] = {"max_dtheta": float(np.max(np.abs(d))), "mean_dtheta": float(np.mean(d)),
-                                            "all_stuck": bool(jnp.all(sol.final.stuck[1:-1]))}
+                                            "all_stuck": bool(jnp.all(sol.v_final.stuck[1:-1]))}
     return res

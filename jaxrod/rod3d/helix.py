@@ -32,8 +32,8 @@ import numpy as np
 
 from .. import theory
 from ..params import RodChannel
-from .model import Rod3D
-from .run import simulate_rod3d
+from ..integrators.base import save_grid
+from .model import Rod3D, step_limit
 
 __all__ = ["load_path", "helix_measures", "helix_theory", "post_buckling", "HELIX_SIZES"]
 
@@ -67,28 +67,32 @@ def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset:
     parts, d0, D0, W0 = [], 0.0, 0.0, 0.0
     model = Rod3D(rod, n, control="displacement", damping=damping)
     s = jnp.arange(n + 1) / n
+    from .experiments import run
+
     state = model.initial_state(0.0, lateral_offset=offset * jnp.sin(6 * jnp.pi * s))
-    dts = []
+    dts, t0 = [], 0.0
     for k, (speed, duration) in enumerate(stages):
         model = Rod3D(rod, n, control="displacement", speed=speed, damping=damping)
         n_save = max(2, int(round(duration * sps)) + 1)
         if progress:
             print(f"  stage {k}: speed {speed * 1e3:+g} mm/s for {duration:g} s ({n} segments)", flush=True)
-        sol = simulate_rod3d(model, state, duration, n_save, stop_on_buckle=False, save_state=True)
+        dt = 0.5 * step_limit(model, state[0])
+        sol = run(model, *state, duration, n_save, dt, stop_on_buckle=False, save_state=True)
         if int(sol.result) != 0:
             raise FloatingPointError(f"stage {k} of the load path became non-finite (result {int(sol.result)}).")
         first = 0 if k == 0 else 1
+        obs = {k: np.asarray(v) for k, v in sol.observables.items()}
         parts.append(dict(
-            ts=np.asarray(sol.ts)[first:] + float(state.t), d=d0 + np.asarray(sol.end_displacement)[first:],
-            reaction=np.asarray(sol.reaction)[first:, 1], x=np.asarray(sol.x)[first:],
-            normal_force=np.asarray(sol.normal_force)[first:], axial_force=np.asarray(sol.axial_force)[first:],
-            energy=np.asarray(sol.total_energy)[first:],
+            ts=np.asarray(sol.ts)[first:] + t0, d=d0 + (obs["end_x"][0] - obs["end_x"])[first:],
+            reaction=obs["reaction"][first:, 1], x=np.asarray(sol.q.x)[first:],
+            normal_force=obs["normal_force"][first:], axial_force=obs["axial_force"][first:],
+            energy=np.asarray(sum(sol.energies.values()))[first:],
             dissipated=D0 + np.asarray(sol.dissipated)[first:], work_in=W0 + np.asarray(sol.work_in)[first:],
             stage=np.full(n_save - first, k),
         ))
         d0, D0, W0 = float(parts[-1]["d"][-1]), float(parts[-1]["dissipated"][-1]), float(parts[-1]["work_in"][-1])
-        dts.append(float(sol.dt))
-        state = sol.final
+        dts.append(save_grid(duration, n_save, dt)[1])
+        state, t0 = (sol.q_final, sol.v_final), t0 + duration
     out = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
     out["dt"] = np.asarray(dts)
     return out

@@ -53,34 +53,60 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
-from ..friction import AbstractFriction, Coulomb, Tanh
+from ..friction import Coulomb, Tanh
+from ..models.base import AbstractModel
 from ..params import RodChannel, _concrete
 from .so3 import exp_so3, log_so3, safe_norm, skew
 
-__all__ = ["Rod3D", "Rod3DState"]
+__all__ = ["Rod3D", "Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "step_limit", "sine_velocity"]
 
 E3 = np.array([0.0, 0.0, 1.0])
 # Directors of a straight rod along x: d1 = y, d2 = z, d3 = x (right-handed).
 Q_STRAIGHT = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
 
-class Rod3DState(eqx.Module):
-    """The state of the discrete rod (SI units)."""
+class Rod3DPosition(eqx.Module):
+    """The rod's coordinates `q`: node positions `x` (n+1, 3) [m] and segment directors `Q`
+    (n, 3, 3) (rows d₁, d₂, d₃ in the lab frame: lab → material)."""
 
-    x: Float[Array, "n1 3"]  # node positions [m]
-    v: Float[Array, "n1 3"]  # node velocities [m/s]
-    Q: Float[Array, "n 3 3"]  # segment directors (rows), lab → material
-    w: Float[Array, "n 3"]  # segment angular velocities, material frame [rad/s]
-    stuck: Bool[Array, " n1"]  # contact held by static friction at the last step
-    t: Float[Array, ""]  # time [s]
+    x: Float[Array, "n1 3"]
+    Q: Float[Array, "n 3 3"]
+
+
+class Rod3DVelocity(eqx.Module):
+    """The rod's velocities `v`: node velocities `v` (n+1, 3) [m/s], segment angular
+    velocities `w` (n, 3) in the material frame [rad/s], and the friction law's memory `stuck`
+    (n+1,): whether each contact was held by static friction at the last impulse (it then
+    keeps the static coefficient)."""
+
+    v: Float[Array, "n1 3"]
+    w: Float[Array, "n 3"]
+    stuck: Bool[Array, " n1"]
+
+
+class Rod3DForces(eqx.Module):
+    """What a kick needs (the integrators' `a`): node forces `f` [N] (elastic, contact,
+    gravity, body, damping), material torques `tau` [N·m], wall normal forces `N` [N] and the
+    non-conservative (damping) part `fd` of the node forces [N]."""
+
+    f: Float[Array, "n1 3"]
+    tau: Float[Array, "n 3"]
+    N: Float[Array, " n1"]
+    fd: Float[Array, "n1 3"]
 
 
 def _leaf(x, dtype=None):
     return jnp.asarray(x, dtype=jnp.result_type(float) if dtype is None else dtype)
 
 
-class Rod3D(eqx.Module):
+class Rod3D(AbstractModel):
     """The discrete 3D rod in the channel. See the module docstring for every equation.
+
+    A model like the others: it runs through [`jaxrod.simulate`][] with
+    [`jaxrod.ProjectedVerlet`][] (kick → friction prox → drift → kick → friction prox), in
+    sweeps and under `jit`/`vmap`. Its coordinates are a [`Rod3DPosition`][], its velocities a
+    [`Rod3DVelocity`][] (`model.initial_state(F)` gives both); the friction law is the
+    integrator's ([`jaxrod.Coulomb`][], exact, or [`jaxrod.Tanh`][]).
 
     **Arguments:**
 
@@ -96,7 +122,6 @@ class Rod3D(eqx.Module):
     - `end_load`: the dead load [N] for `control="load"`.
     - `speed`: pushing speed [m/s] for displacement control (negative: the end is pulled back,
       to unload).
-    - `friction`: [`jaxrod.Coulomb`][] (exact set-valued law) or [`jaxrod.Tanh`][] (`eps` in m/s).
     - `contact_stiffness`: Hertz constant k [N/m^2.5] per unit length; default: the rod sinks
       1e-3·R into the wall under its own weight, k = w/(1e-3 R)^{3/2}.
     - `contact_damping`: Hunt–Crossley ζ [s/m], ≥ 0 (default 0: energy is conserved at μ = 0).
@@ -120,7 +145,6 @@ class Rod3D(eqx.Module):
     gravity: bool = eqx.field(static=True)
     friction_sweeps: int = eqx.field(static=True)
     friction_at: str = eqx.field(static=True)
-    friction: AbstractFriction
     speed: Float[Array, ""]
     end_load: Float[Array, ""]
     contact_stiffness: Float[Array, ""]
@@ -140,7 +164,6 @@ class Rod3D(eqx.Module):
         control: str = "force",
         speed: ArrayLike = 0.0,
         end_load: ArrayLike = 0.0,
-        friction: AbstractFriction = Coulomb(),
         contact_stiffness: ArrayLike | None = None,
         contact_damping: ArrayLike = 0.0,
         damping: ArrayLike = 0.0,
@@ -156,15 +179,12 @@ class Rod3D(eqx.Module):
             raise ValueError(f"Rod3D.ends = {ends!r} is invalid: expected 'pinned', 'clamped' or 'free'.")
         if control not in ("force", "load", "displacement"):
             raise ValueError(f"Rod3D.control = {control!r} is invalid: expected 'force', 'load' or 'displacement'.")
-        if not isinstance(friction, (Coulomb, Tanh)):
-            raise ValueError(f"Rod3D.friction = {friction!r} is invalid: expected jaxrod.Coulomb() or jaxrod.Tanh(eps).")
         self.rod = rod
         self.n_segments = int(n_segments)
         self.channel = bool(channel)
         self.ends = ends
         self.control = control
         self.gravity = bool(gravity)
-        self.friction = friction
         self.speed = _leaf(speed)
         self.end_load = _leaf(end_load)
         l0 = rod.L / n_segments
@@ -305,14 +325,112 @@ class Rod3D(eqx.Module):
             rotational=0.5 * jnp.sum(self.inertia[None, :] * w**2),
         )
 
-    def energy_terms(self, s: Rod3DState) -> dict[str, Float[Array, ""]]:
+    def energy_terms(self, q: Rod3DPosition, v: Rod3DVelocity, t=None) -> dict[str, Float[Array, ""]]:
         """Every energy by kind [J]: kinetic, rotational, stretch, shear, bend, twist,
-        gravity (+ body force), contact."""
-        out = self.kinetic_terms(s.v, s.w)
-        out.update(self.elastic_terms(s.x, s.Q))
-        out["gravity"] = self.external_energy(s.x)
-        out["contact"] = self.contact_energy(s.x)
+        gravity (+ body force and the dead end load), contact."""
+        out = self.kinetic_terms(v.v, v.w)
+        out.update(self.elastic_terms(q.x, q.Q))
+        out["gravity"] = self.external_energy(q.x)
+        out["contact"] = self.contact_energy(q.x)
         return out
+
+    def kinetic_energy(self, v: Rod3DVelocity) -> Float[Array, ""]:
+        return sum(self.kinetic_terms(v.v, v.w).values())
+
+    # -- the model interface: the pieces of a projected Verlet step ----------------------------
+    def acceleration(self, q: Rod3DPosition, t=None) -> Rod3DForces:
+        """The conservative forces at `q` (those of a rod at rest)."""
+        zero = Rod3DVelocity(jnp.zeros_like(q.x), jnp.zeros(q.Q.shape[:-1], q.x.dtype),
+                             jnp.zeros(q.x.shape[:1], bool))
+        return self.accelerations(q, zero, t)
+
+    def accelerations(self, q: Rod3DPosition, v: Rod3DVelocity, t=None) -> Rod3DForces:
+        """Forces, torques and wall forces at `q` with velocities `v` (contact and viscous
+        damping depend on them)."""
+        return Rod3DForces(*self.forces(q.x, q.Q, v.v))
+
+    def kick(self, q, v: Rod3DVelocity, a: Rod3DForces, h) -> Rod3DVelocity:
+        """Node velocities by f/m, spins by Euler's equations J ω̇ = τ − ω × Jω; held degrees of
+        freedom keep their prescribed values."""
+        J = self.inertia[None, :]
+        vn = v.v + h * a.f / self.mass[:, None]
+        w = v.w + h * (a.tau - jnp.cross(v.w, J * v.w)) / J
+        vn, w = self.constrain(vn, w)
+        return Rod3DVelocity(vn, w, v.stuck)
+
+    def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
+        """x ← x + h v, Q ← exp(−h [ω]×) Q."""
+        return Rod3DPosition(q.x + h * v.v, jnp.einsum("jab,jbc->jac", exp_so3(-h * v.w), q.Q))
+
+    def friction_bounds(self, t=None):
+        """The friction coefficients (μ_s, μ_d): the rod's bounds are μ N per contact, with N
+        from the state (see `friction_update`)."""
+        return self.rod.mu_s, self.rod.mu_d
+
+    def friction_update(self, friction, v_trial: Rod3DVelocity, v_prev: Rod3DVelocity, h, t=None,
+                        q: Rod3DPosition | None = None, a: Rod3DForces | None = None) -> Rod3DVelocity:
+        """The wall friction impulses of a (half) step `h` at the contact points of `q` under
+        the normal forces `a.N` (red–black, see the module docstring); a step of zero length
+        changes nothing (not even the stuck flags)."""
+        v, w, stuck = self.friction_step(friction, q.x, v_trial.v, q.Q, v_trial.w, a.N, v_prev.stuck, h)
+        v, w = self.constrain(v, w)
+        return Rod3DVelocity(v, w, jnp.where(h > 0, stuck, v_prev.stuck))
+
+    def impulse_work(self, v_prev: Rod3DVelocity, v_trial: Rod3DVelocity, v_after: Rod3DVelocity,
+                     a: Rod3DForces, h):
+        """`(lost, work_in)` over a half step `h`: the energy removed by the friction impulse
+        (impulse · mean velocity, the reduced models' midpoint rule) and by damping, and the work
+        of the pushed end (its support force times its prescribed velocity) [J]."""
+        mean_v = 0.5 * (v_prev.v + v_after.v)
+        lost = (jnp.sum(self.mass[:, None] * (v_trial.v - v_after.v) * mean_v)
+                + jnp.sum(self.inertia[None, :] * (v_trial.w - v_after.w) * 0.5 * (v_prev.w + v_after.w))
+                - h * jnp.sum(a.fd * mean_v))
+        if self.control == "displacement":
+            work_in = -h * a.f[-1, 0] * v_after.v[-1, 0]
+        else:
+            work_in = jnp.zeros_like(lost)
+        return lost, work_in
+
+    def amplitude(self, q: Rod3DPosition) -> Float[Array, ""]:
+        """max |θ| over the interior nodes [rad] (0 without a channel: θ is an angle on its wall)."""
+        if not self.channel:
+            return jnp.zeros((), q.x.dtype)
+        return jnp.max(jnp.abs(self.theta(q.x)[1:-1]))
+
+    def stop_measures(self, q, v: Rod3DVelocity, a, t=None):
+        """The amplitude, and whether every free node is at rest and held by static friction
+        at the last impulse (under a constant load nothing can then release it)."""
+        held, _ = self.held()
+        free = ~jnp.any(held, -1)
+        stuck = jnp.all(jnp.where(free, v.stuck, True)) & jnp.all(jnp.where(free[:, None], v.v == 0, True))
+        return self.amplitude(q), stuck
+
+    @property
+    def autonomous(self) -> bool:
+        return self.control != "displacement"
+
+    @property
+    def buckle_threshold(self) -> float:
+        return 0.5
+
+    def observables(self, q: Rod3DPosition, v: Rod3DVelocity, a: Rod3DForces, t=None) -> dict:
+        """Recorded at every save: `theta` (n+1,) angle of every node from the channel bottom
+        [rad], directly comparable with the field model's θ(s, t); `reaction` (2,) compressive
+        support forces along x at node 0 and node n [N]; `end_x` position of the pushed end
+        along x [m]; `normal_force` (n+1,) wall force per length [N/m]; `axial_force` (n,)
+        compressive force of every segment [N]; `height` largest height of the centre line
+        above the channel bottom [m]; `gap` largest distance of a node inside the clearance
+        circle, R − r [m] (> 0 where the rod has lifted off the wall)."""
+        x = q.x
+        return dict(
+            theta=self.theta(x),
+            reaction=jnp.stack([-a.f[0, 0], a.f[-1, 0]]),
+            end_x=x[-1, 0],
+            normal_force=self.contact_normal(x, v.v)[0] / self.voronoi,
+            axial_force=self.axial_force(x, q.Q),
+            height=jnp.max(x[:, 2]) + self.rod.R + self.static_sag(),
+            gap=jnp.max(-self.penetration(x)[0]) if self.channel else jnp.zeros((), x.dtype),
+        )
 
     # -- forces ----------------------------------------------------------------------------
     def generalized_forces(self, x, Q):
@@ -365,9 +483,13 @@ class Rod3D(eqx.Module):
         count = left + right
         return jnp.asarray(left / count), jnp.asarray(right / count)
 
-    def friction_step(self, x, v, Q, w, N, stuck, h):
-        """The friction impulses of a (half) step `h` [s], even nodes then odd nodes.
+    def friction_step(self, friction, x, v, Q, w, N, stuck, h):
+        """The friction impulses of a (half) step `h` [s] under the law `friction`
+        ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]), even nodes then odd nodes.
         Returns the new (v, w, stuck)."""
+        if not isinstance(friction, (Coulomb, Tanh)):
+            raise ValueError(f"friction = {friction!r} is invalid for the 3D rod: expected jaxrod.Coulomb() "
+                             "or jaxrod.Tanh(eps).")
         if not self.channel:  # no wall, no contact, no friction
             return v, w, stuck
         held, _ = self.held()
@@ -400,7 +522,7 @@ class Rod3D(eqx.Module):
                 u = u - jnp.einsum("iab,ib->ia", W, p_acc)  # without the node's own impulse
                 bound_s = mu_s * N * h
                 bound_d = mu_d * N * h
-                p, sticks = _prox(self.friction, u, W, jnp.where(stuck, bound_s, bound_d), bound_d, active)
+                p, sticks = _prox(friction, u, W, jnp.where(stuck, bound_s, bound_d), bound_d, active)
                 mine = (idx % 2 == colour)[:, None]
                 dp = jnp.where(mine, p - p_acc, 0.0)
                 p_acc = jnp.where(mine, p, p_acc)
@@ -427,9 +549,11 @@ class Rod3D(eqx.Module):
         w = jnp.where(held_s[:, None], 0.0, w)
         return v, w
 
-    def max_frequency(self, state: Rod3DState, iters: int = 80) -> Float[Array, ""]:
-        """ω_max [rad/s] of the linearised conservative dynamics at `state`, by power iteration
-        on M⁻¹H (Hessian-vector products by forward-over-reverse AD)."""
+    def max_frequency(self, q: Rod3DPosition | None = None, iters: int = 80) -> Float[Array, ""]:
+        """ω_max [rad/s] of the linearised conservative dynamics at `q` (default: the straight
+        rod under its end load), by power iteration on M⁻¹H (Hessian-vector products by
+        forward-over-reverse AD). The explicit step limit is 2/ω_max."""
+        state = self.initial_state(self.end_load)[0] if q is None else q
         held_n, held_s = self.held()
         dtype = state.x.dtype
         free_n = jnp.where(held_n, 0.0, 1.0).astype(dtype)
@@ -470,10 +594,14 @@ class Rod3D(eqx.Module):
             return 0.0 * self.rod.R
         return (self.rod.rho * self.rod.g / self.contact_stiffness) ** (2.0 / 3.0)
 
-    def initial_state(self, F: ArrayLike = 0.0, lateral_velocity=None, lateral_offset=None) -> Rod3DState:
+    def initial_state(self, F: ArrayLike = 0.0, lateral_velocity=None,
+                      lateral_offset=None) -> tuple[Rod3DPosition, Rod3DVelocity]:
         """A straight rod along x on the channel bottom (or on the x axis without a channel),
         compressed to the uniform axial force `F` [N] (length L(1 − F/EA)), at rest except for
-        an optional lateral (y) velocity [m/s] and lateral offset [m] per node."""
+        an optional lateral (y) velocity [m/s] and lateral offset [m] per node.
+
+        **Returns:** `(q0, v0)`, a [`Rod3DPosition`][] and a [`Rod3DVelocity`][] (every
+        contact at rest starts held by static friction)."""
         n = self.n
         F = _leaf(F)
         dtype = F.dtype
@@ -508,7 +636,7 @@ class Rod3D(eqx.Module):
         Q = jnp.stack([d1, d2, d3], -2)
         v, w = self.constrain(v, jnp.zeros((n, 3), dtype))
         at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
-        return Rod3DState(x, v, Q, w, at_rest, jnp.zeros((), dtype))
+        return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest)
 
     # -- observables -------------------------------------------------------------------------
     def theta(self, x) -> Float[Array, " n1"]:
@@ -561,3 +689,20 @@ def _prox(law, u, W, bound_stick, bound_slip, active):
     p_slip = -solve(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0], A, us)
     p = jnp.where(sticks[:, None], p_stick, jnp.where(slips[:, None], p_slip, 0.0))
     return p, sticks
+
+
+def sine_velocity(model: Rod3D, v0, mode: int = 6):
+    """Lateral speed v₀ sin(mπs/L) at the n + 1 nodes [m/s] (the sine perturbation)."""
+    s = jnp.arange(model.n + 1) / model.n
+    return jnp.asarray(v0) * jnp.sin(mode * jnp.pi * s)
+
+
+@eqx.filter_jit
+def _limit(model, q):
+    return 2.0 / model.max_frequency(q)
+
+
+def step_limit(model: Rod3D, q: Rod3DPosition | None = None) -> float:
+    """The explicit step limit 2/ω_max [s] of the rod at `q` (default: straight, under its end
+    load): the stiffest of the axial, shear, bending, twist and contact vibrations."""
+    return float(_limit(model, q))
