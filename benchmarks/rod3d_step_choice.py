@@ -38,7 +38,8 @@ import numpy as np  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 from jaxrod.rod3d import Rod3D, step_limit  # noqa: E402
-from jaxrod.rod3d.experiments import e1_curves, sine_velocity  # noqa: E402
+from jaxrod.rod3d import sine_velocity  # noqa: E402
+from jaxrod.rod3d.experiments import e1_curves  # noqa: E402
 from jaxrod.rod3d.so3 import skew  # noqa: E402
 
 
@@ -46,15 +47,16 @@ def newton_iteration_cost(model, state, repeats=5):
     """Wall time [s] of the Jacobian of the forces in (x, φ) plus one dense solve with the
     backward-Euler matrix M/h² − ∂f/∂q (the least one Newton iteration of an implicit step costs)."""
     n1 = model.n + 1
+    q, v = state
 
     def residual(q):
         x = q[: 3 * n1].reshape(n1, 3)
         phi = q[3 * n1:].reshape(model.n, 3)
-        Q = state.Q - jnp.einsum("jab,jbc->jac", skew(phi), state.Q)
-        f, tau, _, _ = model.forces(x, Q, state.v)
+        Q = q.Q - jnp.einsum("jab,jbc->jac", skew(phi), q.Q)
+        f, tau, _, _ = model.forces(x, Q, v.v)
         return jnp.concatenate([f.ravel(), tau.ravel()])
 
-    h = 10.0 * step_limit(model, state)  # the step size does not change the cost
+    h = 10.0 * step_limit(model, q)  # the step size does not change the cost
     M = jnp.concatenate([jnp.repeat(model.mass, 3), jnp.tile(model.inertia, model.n)])
 
     @jax.jit
@@ -68,7 +70,7 @@ def newton_iteration_cost(model, state, repeats=5):
     def jacobian_only(q):
         return jax.jacfwd(residual)(q)
 
-    q0 = jnp.concatenate([state.x.ravel(), jnp.zeros(3 * model.n, state.x.dtype)])
+    q0 = jnp.concatenate([q.x.ravel(), jnp.zeros(3 * model.n, q.x.dtype)])
 
     def best_of(fn):
         jax.block_until_ready(fn(q0))
@@ -113,7 +115,7 @@ def main():
         r.update(F_error_vs_quarter_limit_N=r["critical_force_N"] - ref, newton_iteration_us=1e6 * t_newton,
                  jacobian_us=1e6 * t_jac, dof=dof,
                  break_even_step_ratio=1e6 * t_newton / step_us, contact_omega_rad_s=omega_c,
-                 contact_period_s=2 * math.pi / omega_c, explicit_limit_s=float(step_limit(model, s0)))
+                 contact_period_s=2 * math.pi / omega_c, explicit_limit_s=float(step_limit(model, s0[0])))
     os.makedirs(os.path.join(os.path.dirname(__file__), "results"), exist_ok=True)
     path = os.path.join(os.path.dirname(__file__), "results", "rod3d_step_choice.csv")
     with open(path, "w", newline="") as fh:

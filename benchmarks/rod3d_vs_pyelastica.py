@@ -17,7 +17,7 @@ no longer sets the step; PyElastica's is unscaled. So:
    inertia is multiplied by the same alpha before `finalize()`), dt = 0.5 x
    `jaxrod.rod3d.step_limit`. That PyElastica's *unmodified* rod is unstable at this dt is
    checked and reported (`pyelastica_unscaled_stable`).
-   - single rod: jaxrod = one compiled `_run` call of `--steps` steps, timed with
+   - single rod: jaxrod = one compiled `_run` call (jaxrod.simulate) of `--steps` steps, timed with
      `jax.block_until_ready` after a warm-up call (compile time = first call - steady call);
      PyElastica = its integration loop (`PositionVerlet.step` in a Python loop, as
      `elastica.integrate` does without the progress bar) over the same steps. Min over
@@ -84,14 +84,22 @@ import jax.numpy as jnp  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 from jaxrod.rod3d import Rod3D, step_limit  # noqa: E402
-from jaxrod.rod3d.run import _run  # noqa: E402
 
 L = 0.3  # m
 A0 = 1e-3  # m/s: lateral velocity amplitude (midpoint displacement ~ A0 / w1 = 7 um)
 A_MID = 0.1  # m/s: 0.7 mm, nonlinear (the pinned rod stretches: tension ~0.7 Euler load)
 A_LARGE = 2.0  # m/s: linear amplitude 14 mm = L/21; stretching dominates (nonlinear)
 BATCH = 64
-THRESHOLD = 0.5  # unused without a channel (no buckling test), required by `_run`
+
+
+@eqx.filter_jit
+def _run(model, state, dt: float, steps: int):
+    """`steps` steps of jaxrod's one engine (`jaxrod.simulate`, projected Verlet; no channel, so
+    no buckling or stick stop), one compiled call. Returns ((q, v) at the end, steps taken,
+    observables at the two saves)."""
+    opts = jr.RunOptions(stop_on_buckle=False, stop_when_stuck=False, save_state=False)
+    sol = jr.simulate(model, jr.ProjectedVerlet(dt), *state, steps * dt, n_save=2, options=opts, throw=False)
+    return (sol.q_final, sol.v_final), sol.n_steps, sol.observables
 
 
 # -- the two rods ---------------------------------------------------------------------------------
@@ -154,7 +162,7 @@ class _NoFrictionPass(Rod3D):
     in contact (N = 0), so `friction_step` returns its input and this is the same run; it
     measures what that pass costs when it has nothing to do."""
 
-    def friction_step(self, x, v, Q, w, N, stuck, h):
+    def friction_step(self, friction, x, v, Q, w, N, stuck, h):
         return v, w, stuck
 
 
@@ -185,17 +193,16 @@ def speed(n: int, steps: int, batch_steps: int, repeats: int) -> list[dict]:
     model = jaxrod_model(n)
     alpha = float(model.rotary_scale)
     s0 = model.initial_state(0.0, lateral_velocity=A0 * mode_one(n))
-    dt = 0.5 * step_limit(model, s0)
-    h = jnp.asarray(dt)
+    dt = 0.5 * step_limit(model, s0[0])
     mid = n // 2
 
     def time_jaxrod():
-        return best_of(lambda: jax.block_until_ready(_run(model, s0, h, steps, 2, THRESHOLD, False)), 1)
+        return best_of(lambda: jax.block_until_ready(_run(model, s0, dt, steps)), 1)
 
     bare = _NoFrictionPass(model.rod, n, channel=False, gravity=False, ends="pinned")
 
     def time_bare():
-        return best_of(lambda: jax.block_until_ready(_run(bare, s0, h, steps, 2, THRESHOLD, False)), 1)
+        return best_of(lambda: jax.block_until_ready(_run(bare, s0, dt, steps)), 1)
 
     def time_pyelastica():
         sim, r = pyelastica_rod(model, A0, alpha)  # from the same initial state each time
@@ -204,9 +211,9 @@ def speed(n: int, steps: int, batch_steps: int, repeats: int) -> list[dict]:
     # warm-ups: jaxrod compiles; PyElastica's first steps compile numba kernels or load them
     # from its cache
     t0 = time.perf_counter()
-    jax.block_until_ready(_run(model, s0, h, steps, 2, THRESHOLD, False))
+    jax.block_until_ready(_run(model, s0, dt, steps))
     first = time.perf_counter() - t0
-    jax.block_until_ready(_run(bare, s0, h, steps, 2, THRESHOLD, False))
+    jax.block_until_ready(_run(bare, s0, dt, steps))
     stepper = ea.PositionVerlet()
     t0 = time.perf_counter()
     sim, _ = pyelastica_rod(model, A0, alpha)
@@ -216,36 +223,34 @@ def speed(n: int, steps: int, batch_steps: int, repeats: int) -> list[dict]:
     # side by side: the three single-rod runs interleaved, min over repeats of each
     t_jr = t_bare = t_pe = math.inf
     for _ in range(repeats):
-        t, (c, _) = time_jaxrod()
+        t, c = time_jaxrod()
         t_jr = min(t_jr, t)
-        t, (c_bare, _) = time_bare()
+        t, c_bare = time_bare()
         t_bare = min(t_bare, t)
         t, r = time_pyelastica()
         t_pe = min(t_pe, t)
-    assert int(c[-1]) == steps, "jaxrod froze the run early"
-    assert np.array_equal(c_bare[0].x, c[0].x), "without the friction pass the run differs"
-    y_jr = float(c[0].x[mid, 1])
+    assert int(c[1]) == steps, "jaxrod froze the run early"
+    assert np.array_equal(c_bare[0][0].x, c[0][0].x), "without the friction pass the run differs"
+    y_jr = float(c[0][0].x[mid, 1])
     y_pe = float(r.position_collection[1, mid])
     unscaled_ok = pyelastica_stable(model, dt, min(steps, 2000), 1.0)
 
     # jaxrod, a batch of 64 amplitudes, interleaved with more PyElastica single-rod runs
     amps = A0 * np.linspace(0.5, 2.0, BATCH)
     states = jax.vmap(lambda a: model.initial_state(0.0, lateral_velocity=a * mode_one(n)))(jnp.asarray(amps))
-    run_batch = eqx.filter_jit(
-        jax.vmap(lambda m, s: _run(m, s, h, batch_steps, 2, THRESHOLD, False), (None, 0))
-    )
+    run_batch = eqx.filter_jit(jax.vmap(lambda m, s: _run(m, s, dt, batch_steps), (None, 0)))
     t0 = time.perf_counter()
     jax.block_until_ready(run_batch(model, states))
     first_b = time.perf_counter() - t0
     jax.block_until_ready(run_batch(bare, states))
     t_b = t_bb = math.inf
     for _ in range(max(1, repeats - 1)):
-        t, (cb, _) = best_of(lambda: jax.block_until_ready(run_batch(model, states)), 1)
+        t, cb = best_of(lambda: jax.block_until_ready(run_batch(model, states)), 1)
         t_b = min(t_b, t)
         t_bb = min(t_bb, best_of(lambda: jax.block_until_ready(run_batch(bare, states)), 1)[0])
         t_pe = min(t_pe, time_pyelastica()[0])
-    yb = np.asarray(cb[0].x[:, mid, 1])
-    assert np.all(np.isfinite(np.asarray(cb[0].x))) and np.all(np.asarray(cb[-1]) == batch_steps)
+    yb = np.asarray(cb[0][0].x[:, mid, 1])
+    assert np.all(np.isfinite(np.asarray(cb[0][0].x))) and np.all(np.asarray(cb[1]) == batch_steps)
     # small amplitudes: y_mid / a is the same for every member (a check that vmap ran them all)
     linear_dev = float(np.max(np.abs(yb / amps / (yb[0] / amps[0]) - 1)))
 
@@ -279,17 +284,16 @@ def agreement(n: int, periods: float, steps: int, amplitude: float = A0) -> list
     compilation serves every amplitude and both alphas), y compared after every chunk."""
     model = jaxrod_model(n, rotary_scale=1.0)
     s = model.initial_state(0.0, lateral_velocity=amplitude * mode_one(n))
-    dt = 0.5 * step_limit(model, s)
+    dt = 0.5 * step_limit(model, s[0])
     w1 = euler_bernoulli_w1(model)
     chunks = max(1, math.ceil(periods * 2 * math.pi / w1 / (steps * dt)))
     mid = n // 2
-    y_jr = [float(s.x[mid, 1])]
+    y_jr = [float(s[0].x[mid, 1])]
     tension = 0.0
     t0 = time.perf_counter()
     for _ in range(chunks):
-        c, obs = jax.block_until_ready(_run(model, s, jnp.asarray(dt), steps, 2, THRESHOLD, False))
-        s = c[0]
-        y_jr.append(float(s.x[mid, 1]))
+        s, _, obs = jax.block_until_ready(_run(model, s, dt, steps))
+        y_jr.append(float(s[0].x[mid, 1]))
         tension = max(tension, float(-jnp.min(obs["axial_force"][-1])))
     t_jr = time.perf_counter() - t0
     y_jr = np.asarray(y_jr)

@@ -261,7 +261,7 @@ def _resolution(rod, dF, model, n, mode, dt):
         return n, dt
     try:
         probe = Scene(rod, dF, kind=model, n=n, mode=mode, dt=dt)
-        n = probe.nodes() if model == "field" else (n or 32)
+        n = probe.size()
         return n, probe.step()
     except (ValueError, jax.errors.ConcretizationTypeError):
         raise ValueError(
@@ -403,7 +403,7 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
     dFs = np.asarray(dFs, float)
     if model != "mode":
         probe = Scene(rod, float(np.max(dFs)), kind=model, n=n, mode=mode, dt=dt)
-        n = probe.nodes() if model == "field" else (n or 32)
+        n = probe.size()
         dt = probe.step() if dt is None else dt
     fn = lambda dF: critical_velocity(rod, dF, model=model, mode=mode, n=n, dt=dt, bracket=bracket,
                                       rtol=rtol, max_iter=max_iter, t1=t1, sensitivities=("mu", "dF"))
@@ -427,7 +427,7 @@ def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, 
     base = RodChannel.reference(mu=float(mus.max()), **overrides)
     if model != "mode":
         probe = Scene(base, float(bracket[1]), kind=model, n=n, mode=mode, dt=dt)
-        n = probe.nodes() if model == "field" else (n or 32)
+        n = probe.size()
         dt = probe.step() if dt is None else dt
     root_key = jax.random.key(seed)
 

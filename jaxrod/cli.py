@@ -529,7 +529,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="friction coefficient (default: 0.3 and, in the same figure, 0)")
     mp.add_argument("--dF", type=_range_spec, default="0.5:64:20", help="LO:HI:N loads above F0_6 [N] (log-spaced)")
     mp.add_argument("--v0", type=_range_spec, default="0.001:0.2:24", help="LO:HI:N sine amplitudes [m/s] (log-spaced)")
-    mp.add_argument("--model", choices=["mode", "galerkin", "field", "auto"], default="field",
+    mp.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
     mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
@@ -540,7 +540,7 @@ def build_parser() -> argparse.ArgumentParser:
     bd = sub.add_parser("boundary", help="critical sine velocity v0*(dF) by root search")
     bd.add_argument("--mu", type=_finite_float, default=0.3)
     bd.add_argument("--dF", type=_range_spec, default="1:60:6", help="LO:HI:N loads above F0_6 [N]")
-    bd.add_argument("--model", choices=["mode", "galerkin", "field", "auto"], default="field",
+    bd.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     bd.add_argument("--n", type=_positive_int, default=None)
     bd.add_argument("--rtol", type=_finite_float, default=1e-6, help="relative tolerance (default 1e-6)")
@@ -557,7 +557,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="m/s for velocities, N/m for random-position, m for random-shape")
     cl.add_argument("--realizations", type=_positive_int, default=1)
     cl.add_argument("--seed", type=int, default=0)
-    cl.add_argument("--model", choices=["mode", "galerkin", "field", "auto"], default="field",
+    cl.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     cl.add_argument("--n", type=_positive_int, default=None)
     cl.add_argument("--max-dF", dest="max_dF", type=_finite_float, default=100.0, help="bracket top [N]")

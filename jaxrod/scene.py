@@ -28,10 +28,12 @@ from .simulate import simulate
 
 __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1"]
 
-MODELS = ("mode", "galerkin", "field")
+MODELS = ("mode", "galerkin", "field", "rod3d")
 PERTURBATIONS = ("sine", "random-velocity", "random-position", "random-shape")
 DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence) and `default_nodes`
 DEFAULT_MODES = 32
+DEFAULT_SEGMENTS = 60  # the 3D rod, as E1 and E6 (README: the full model)
+ROD3D_DT_FRACTION = 0.5  # of the 3D rod's explicit step limit
 DEFAULT_T1 = 2.0  # s, as the reference paper
 DT_FRACTION = 0.4  # of the explicit step limit
 SINGLE_MODE_DT = 1e-4  # s
@@ -86,12 +88,14 @@ class Scene(eqx.Module):
     - `rod`: the [`jaxrod.RodChannel`][].
     - `dF`: load above the critical mode's frictionless load [N] (dynamic).
     - `perturbation`: any perturbation (dynamic leaves: amplitude, key, ...).
-    - `kind`: `"mode"`, `"galerkin"` or `"field"` (static).
+    - `kind`: `"mode"`, `"galerkin"`, `"field"` or `"rod3d"` (the full 3D rod,
+      [`jaxrod.rod3d.Rod3D`][], under the dead load F with friction at the contact point;
+      perturbations as lateral velocities or offsets of its nodes) (static).
     - `n`: nodes (field; default `default_nodes` of the load: 128, or 384 past 32 unstable
-      modes) or modes (Galerkin, default 32) (static).
+      modes), modes (Galerkin, default 32) or segments (3D rod, default 60) (static).
     - `mode`: the single-mode model's mode (static, default 6).
     - `dt`: fixed step [s] (static; default 0.4 of the step limit at ΔF = 0 for field and
-      Galerkin, 1e-4 s for one mode).
+      Galerkin, 1e-4 s for one mode, 0.5 of the explicit limit for the 3D rod).
     - `threshold`: buckling amplitude max|θ| [rad] (static, default 0.5).
     - `grid_dt`: step of that grid's forcing phase (static; default 0.4 of its limit).
     - `n_grid`: nodes of the field grid on which random perturbations are drawn before being
@@ -129,7 +133,21 @@ class Scene(eqx.Module):
             return SingleMode.from_rod(self.rod, self.mode, F=self.F)
         if self.kind == "galerkin":
             return GalerkinModel.from_rod(self.rod, self.n or DEFAULT_MODES, F=self.F)
+        if self.kind == "rod3d":
+            from .rod3d import Rod3D
+
+            return Rod3D(self.rod, self.size(), control="load", end_load=self.F)
         return FieldModel.from_rod(self.rod, self.nodes(), F=self.F)
+
+    def size(self) -> int | None:
+        """The model's static size: field nodes, Galerkin modes, 3D segments (`None`: one mode)."""
+        if self.kind == "field":
+            return self.nodes()
+        if self.kind == "galerkin":
+            return self.n or DEFAULT_MODES
+        if self.kind == "rod3d":
+            return self.n or DEFAULT_SEGMENTS
+        return None
 
     def nodes(self) -> int:
         """Field nodes: `n`, or `default_nodes` of the (concrete) load."""
@@ -156,6 +174,14 @@ class Scene(eqx.Module):
             return float(self.dt)
         if self.kind == "mode":
             return SINGLE_MODE_DT
+        if self.kind == "rod3d":
+            from .rod3d import step_limit
+
+            try:
+                return ROD3D_DT_FRACTION * step_limit(self.model())
+            except jax.errors.ConcretizationTypeError:
+                raise ValueError("Scene.dt must be given explicitly for the 3D rod when the rod or the load "
+                                 "is traced: the step is a static setting.") from None
         unloaded = eqx.tree_at(lambda s: s.dF, self, jnp.zeros(()))
         if self.kind == "field":
             model = FieldModel.from_rod(self.rod, self.nodes(), F=unloaded.F)
@@ -175,6 +201,8 @@ class Scene(eqx.Module):
     def initial_state(self):
         """(q₀, v₀) in the model's coordinates."""
         model = self.model()
+        if self.kind == "rod3d":
+            return self._rod3d_state(model)
         if self.kind != "mode":
             return self.perturbation.initial_state(model, self.integrator())
         if isinstance(self.perturbation, SineVelocity):
@@ -185,6 +213,23 @@ class Scene(eqx.Module):
         step = self.grid_dt or DT_FRACTION * 2.0 / self._static_omega(grid)
         q, v = self.perturbation.initial_state(grid, ProjectedVerlet(step))
         return project_to_mode(q, self.mode), project_to_mode(v, self.mode)
+
+    def _rod3d_state(self, model):
+        """The perturbation on the 3D rod's n + 1 nodes: a lateral velocity along the wall (sine,
+        random velocity) or a lateral offset along it (random shape), from straight and at
+        rest, pre-compressed to F."""
+        from .rod3d import sine_velocity
+
+        p, n = self.perturbation, model.n
+        if isinstance(p, SineVelocity):
+            return model.initial_state(self.F, lateral_velocity=sine_velocity(model, p.v0, p.mode))
+        if isinstance(p, (RandomVelocity, RandomShape)):
+            u = jax.random.uniform(p.key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * p.amplitude
+            if isinstance(p, RandomVelocity):
+                return model.initial_state(self.F, lateral_velocity=u)
+            return model.initial_state(self.F, lateral_offset=u)
+        raise ValueError(f"perturbation {type(p).__name__} is not available with the 3D rod: expected "
+                         "'sine', 'random-velocity' or 'random-shape'.")
 
     def _static_omega(self, model) -> float:
         try:
@@ -209,6 +254,8 @@ class Scene(eqx.Module):
     def field_of(self, q):
         """θ on a grid of nodes for plots: (s [m], θ [rad]) from the model's coordinates."""
         model = self.model()
+        if self.kind == "rod3d":
+            return jnp.linspace(0.0, self.rod.L, model.n + 1), model.theta(q.x)
         if self.kind == "field":
             return model.sample_points(), q
         if self.kind == "galerkin":
@@ -223,6 +270,8 @@ class Scene(eqx.Module):
 
         if self.kind == "field":
             return dominant_mode(q)
+        if self.kind == "rod3d":
+            return dominant_mode(self.model().theta(q.x)[..., 1:-1])
         if self.kind == "galerkin":
             return jnp.argmax(jnp.abs(q), axis=-1) + 1
         return jnp.asarray(self.mode)

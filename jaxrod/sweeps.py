@@ -35,7 +35,7 @@ from .batching import DEFAULT_LANES, DEFAULT_REFILL_EVERY, run_pool
 from .integrators.base import RunOptions, save_grid
 from .modal import dominant_mode
 from .params import RodChannel
-from .scene import MODELS, PERTURBATIONS, Scene, default_nodes, make_perturbation
+from .scene import DEFAULT_SEGMENTS, MODELS, PERTURBATIONS, Scene, default_nodes, make_perturbation
 from . import theory
 from .simulate import simulate
 
@@ -44,7 +44,6 @@ __all__ = ["SweepSpec", "SweepResult", "sweep", "PARAMETERS", "wilson_interval"]
 ROD_FIELDS = ("L", "d", "E", "rho_v", "nu", "R", "g", "mu_s", "mu_d")
 PARAMETERS = ("dF", "amplitude", "mu", "realization") + ROD_FIELDS
 _STIFFNESS_FIELDS = ("L", "d", "E", "rho_v", "R", "g")  # set the step limit
-ROD3D_SEGMENTS = 60  # as E1 and E6 (README: the full model)
 OUTPUTS = ("buckled", "t_buckle", "dominant_mode", "max_theta", "final_theta", "stuck", "t_stop", "result",
            "steps")
 
@@ -81,8 +80,8 @@ class SweepSpec:
     rod: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
-        if self.model not in MODELS + ("rod3d",):
-            raise ValueError(f"SweepSpec.model = {self.model!r} is invalid: expected one of {MODELS + ('rod3d',)}.")
+        if self.model not in MODELS:
+            raise ValueError(f"SweepSpec.model = {self.model!r} is invalid: expected one of {MODELS}.")
         if self.model == "rod3d" and self.perturbation == "random-position":
             raise ValueError("SweepSpec.perturbation = 'random-position' is not available with model 'rod3d': "
                              "expected 'sine', 'random-velocity' or 'random-shape'.")
@@ -264,21 +263,6 @@ def _member_inputs(spec: SweepSpec, p, index, base_key):
 N_SAVE = 201  # the stick test runs at every save, so a stuck member stops within t1/200
 
 
-def _rod3d_setup(spec: SweepSpec, n: int, safe, dF, amp, key):
-    """The 3D rod under the dead load F⁰_m* + ΔF, the perturbation as a lateral velocity (sine,
-    random-velocity) or offset (random-shape) of its n + 1 nodes."""
-    from .rod3d.model import Rod3D, sine_velocity
-
-    F = theory.frictionless_load(safe, theory.critical_mode(safe)) + dF
-    model = Rod3D(safe, n, control="load", end_load=F)
-    if spec.perturbation == "sine":
-        return model, *model.initial_state(F, lateral_velocity=sine_velocity(model, amp, spec.mode))
-    u = jax.random.uniform(key, (n + 1,), jnp.result_type(float), -1.0, 1.0) * amp
-    if spec.perturbation == "random-velocity":
-        return model, *model.initial_state(F, lateral_velocity=u)
-    return model, *model.initial_state(F, lateral_offset=u)  # random-shape
-
-
 def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     """A member in three pure parts: `setup(params, index, base_key)` gives its model and its
     [`RunState`][jaxrod.integrators.base.RunState] at t = 0, the fixed-step engine advances it
@@ -289,14 +273,11 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
 
     def setup(p, index, base_key):
         ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
-        if spec.model == "rod3d":
-            model, q0, v0 = _rod3d_setup(spec, n, safe, dF, amp, key)
-        else:
-            pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
-            scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
-                          grid_dt=grid_dt)
-            model = scene.model()
-            q0, v0 = scene.initial_state()
+        pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
+        scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
+                      grid_dt=grid_dt)
+        model = scene.model()
+        q0, v0 = scene.initial_state()
         return ok, model, integrator.start(model, q0, v0, opts)
 
     def advance(model, run):
@@ -424,7 +405,7 @@ def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
     rods at the largest load (a given `spec.dt` must lie below it)."""
     from .rod3d.model import Rod3D, step_limit
 
-    n = spec.n or ROD3D_SEGMENTS
+    n = spec.n or DEFAULT_SEGMENTS
     limits = []
     for r in rods:
         F = float(theory.frictionless_load(r, theory.critical_mode(r))) + dF_max
