@@ -34,7 +34,6 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
-import numpy as np  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 from jaxrod.rod3d import Rod3D, step_limit  # noqa: E402

@@ -8,6 +8,8 @@ horizon 2 s):
 - `map`: the default E3 map of `jaxrod map` / `make demo`: 20 x 24 (dF, v0) points per mu,
   mu = 0.3 and 0, n = 384 nodes (the default for dF up to 64 N).
 - `e3`: the E3 member at n = 128 on 256 (dF, v0) points spanning the map (16 x 16).
+- `rod3d`: 64 3D rods (30 segments, dead load F0_6 + dF, 8 x 8 (dF, v0) points, horizon
+  0.1 s) through the same sweep path.
 
 Lane utilisation = member steps / lane steps: the steps the members needed over the steps the
 lanes computed. For the pool, lane steps = rounds x lanes x refill_every per device; for the
@@ -72,15 +74,18 @@ def child(scenes: list[str], repeats: int, loop_members: int) -> list[dict]:
             cases = [(SweepSpec(model="field", mu=mu),
                       {"dF": np.geomspace(0.5, 64, 20), "amplitude": np.geomspace(1e-3, 0.2, 24)})
                      for mu in (0.3, 0.0)]
-        else:
+        elif scene == "e3":
             cases = [(SweepSpec(model="field", n=128, mu=0.3),
                       {"dF": np.geomspace(0.5, 64, 16), "amplitude": np.geomspace(1e-3, 0.2, 16)})]
+        else:
+            cases = [(SweepSpec(model="rod3d", n=30, mu=0.3, t1=0.1),
+                      {"dF": np.geomspace(1.0, 20.0, 8), "amplitude": np.geomspace(2e-3, 0.1, 8)})]
         for spec, inputs in cases:
             labels = {}
             for sched in ("chunk", "pool"):
                 # the e3 sweep takes milliseconds: more repeats for a stable minimum
-                res, t, compile_s = timed(spec, inputs, repeats if scene == "map" else 5 * repeats,
-                                          scheduling=sched)
+                reps = {"map": repeats, "e3": 5 * repeats, "rod3d": 1}[scene]
+                res, t, compile_s = timed(spec, inputs, reps, scheduling=sched)
                 m, _ = save_grid(spec.t1, N_SAVE, res.meta["dt"])
                 lane_steps = (res.meta["lane_steps"] if sched == "pool"
                               else _chunk_lane_steps(res.outputs["steps"], m, dev))
@@ -116,7 +121,7 @@ def child(scenes: list[str], repeats: int, loop_members: int) -> list[dict]:
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--devices", type=int, nargs="*", default=[1, 2])
-    ap.add_argument("--scenes", nargs="*", default=["map", "e3"], choices=["map", "e3"])
+    ap.add_argument("--scenes", nargs="*", default=["map", "e3", "rod3d"], choices=["map", "e3", "rod3d"])
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--loop-members", type=int, default=64)
     ap.add_argument("--quick", action="store_true", help="e3 scene only, 2 devices, 1 repeat")

@@ -159,7 +159,6 @@ def _cmd_simulate(args) -> int:
 
     jax.config.update("jax_enable_x64", True)
     import jax.numpy as jnp
-    import numpy as np
 
     from .scene import Scene, make_perturbation
 

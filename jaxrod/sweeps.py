@@ -37,7 +37,6 @@ from .modal import dominant_mode
 from .params import RodChannel
 from .scene import DEFAULT_SEGMENTS, MODELS, PERTURBATIONS, Scene, default_nodes, make_perturbation
 from . import theory
-from .simulate import simulate
 
 __all__ = ["SweepSpec", "SweepResult", "sweep", "PARAMETERS", "wilson_interval"]
 
@@ -581,9 +580,7 @@ def sweep(
 
     outputs = {k: np.full(len(index), _FILL[k]) for k in OUTPUTS}
     n_chunks = math.ceil(len(index) / chunk_size)
-    bar = _progress(n_chunks, len(index), progress)
-    t_start = time.perf_counter()
-    done_members = 0
+    bar = _progress(len(index), progress)
     for c in range(n_chunks):
         lo, hi = c * chunk_size, min((c + 1) * chunk_size, len(index))
         f = _chunk_file(path, c) if path is not None else None
@@ -592,7 +589,7 @@ def sweep(
                 for k in OUTPUTS:
                     if k in z:
                         outputs[k][lo:hi] = z[k]
-            bar.update(1, hi - lo, skipped=True)
+            bar.update(hi - lo, skipped=True)
             continue
         pad = chunk_size - (hi - lo)
         # deal the chunk's members to the devices in turn (member j to device j mod D): the
@@ -613,11 +610,10 @@ def sweep(
             outputs[k][lo:hi] = chunk_out[k]
         if f is not None:
             _atomic_write(f, lambda t: np.savez(t, **chunk_out), ".npz")
-        done_members += hi - lo
-        bar.update(1, hi - lo)
+        bar.update(hi - lo)
         if on_chunk is not None:
             on_chunk(c)
-    bar.close(time.perf_counter() - t_start)
+    bar.close()
     inputs_out = {**sel, "index": index}
     result = SweepResult(inputs_out, outputs, tuple(meta["shape"]), names, meta)
     # how this call used its lanes (not part of the results, nor of the resume fingerprint)
@@ -675,9 +671,10 @@ def _version() -> str:
 
 
 class _progress:
-    """A tqdm bar over chunks showing members/s (silent when disabled or tqdm is missing)."""
+    """A tqdm bar counting members, with members/s of the members run by this call (silent when
+    disabled or tqdm is missing). Advances once per finished chunk."""
 
-    def __init__(self, n_chunks, n_members, enabled):
+    def __init__(self, n_members, enabled):
         self.bar = None
         self.members = 0
         self.t0 = time.perf_counter()
@@ -685,19 +682,18 @@ class _progress:
             try:
                 from tqdm.auto import tqdm
 
-                self.bar = tqdm(total=n_chunks, unit="chunk", desc=f"sweep ({n_members} members)")
+                self.bar = tqdm(total=n_members, unit="member", desc="sweep")
             except ImportError:  # pragma: no cover
                 self.bar = None
 
-    def update(self, chunks, members, skipped=False):
+    def update(self, members, skipped=False):
         if not skipped:
             self.members += members
         if self.bar is not None:
             rate = self.members / max(time.perf_counter() - self.t0, 1e-9)
             self.bar.set_postfix_str(f"{rate:.1f} members/s" + (" (resumed)" if skipped else ""))
-            self.bar.update(chunks)
+            self.bar.update(members)
 
-    def close(self, elapsed):
+    def close(self):
         if self.bar is not None:
             self.bar.close()
-

@@ -45,7 +45,6 @@ which governs rolling, is never scaled. Set `rotary_scale=1` for the unscaled ro
 
 from __future__ import annotations
 
-import math
 
 import equinox as eqx
 import jax
