@@ -11,7 +11,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._results import RESULTS
-from ..models.base import AbstractModel
+from ..models.base import AbstractModel, friction_work  # noqa: F401 (integrators import it here)
 from ..solution import Solution
 
 __all__ = ["AbstractIntegrator", "AbstractFixedStep", "RunOptions", "RunState"]
@@ -55,16 +55,6 @@ class AbstractIntegrator(eqx.Module):
     def step_limit(self, model: AbstractModel):
         """The largest stable step for `model` [s] (`inf` when there is none)."""
         return jnp.inf
-
-
-def friction_work(model, v_prev, v_trial, v_after):
-    """Energy friction dissipated by an impulse that took `v_trial` to `v_after` over a
-    (half) step that began at velocity `v_prev`, per degree of freedom (shape of `v`): the
-    impulse times the mean velocity over the step, (v_trial − v_after)·M·(v_prev + v_after)/2
-    (a midpoint rule for ∫ f|v| dt). Zero for a point held at rest: it does not move, so
-    friction does no work on it. Kept per degree of freedom and summed only at the saves: a sum
-    over the nodes at every step costs as much as the rest of the step's bookkeeping."""
-    return jax.grad(model.kinetic_energy)(0.5 * (v_prev + v_after)) * (v_trial - v_after)
 
 
 def save_grid(t1: float, n_save: int, dt: float) -> tuple[int, float]:

@@ -6,10 +6,11 @@ import abc
 import math
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-__all__ = ["AbstractModel"]
+__all__ = ["AbstractModel", "friction_work"]
 
 
 class AbstractModel(eqx.Module):
@@ -84,8 +85,6 @@ class AbstractModel(eqx.Module):
         """`(lost, work_in)` over a half step `h`: the energy friction (and any damping)
         removed, per degree of freedom (see `friction_work`), and the work done on the system
         by driven boundaries [J] (none here)."""
-        from ..integrators.base import friction_work
-
         return friction_work(self, v_prev, v_trial, v_after), jnp.zeros((), jnp.result_type(float))
 
     def observables(self, q, v, a, t) -> dict:
@@ -122,3 +121,13 @@ class AbstractModel(eqx.Module):
     def check(self) -> Bool[Array, ""]:
         """Whether the model's parameters are valid (for result codes under vmap)."""
         return jnp.array(True)
+
+
+def friction_work(model, v_prev, v_trial, v_after):
+    """Energy friction dissipated by an impulse that took `v_trial` to `v_after` over a
+    (half) step that began at velocity `v_prev`, per degree of freedom (shape of `v`): the
+    impulse times the mean velocity over the step, (v_trial − v_after)·M·(v_prev + v_after)/2
+    (a midpoint rule for ∫ f|v| dt). Zero for a point held at rest: it does not move, so
+    friction does no work on it. Kept per degree of freedom and summed only at the saves: a sum
+    over the nodes at every step costs as much as the rest of the step's bookkeeping."""
+    return jax.grad(model.kinetic_energy)(0.5 * (v_prev + v_after)) * (v_trial - v_after)
