@@ -38,7 +38,7 @@ import jax.numpy as jnp  # noqa: E402
 import jaxrod as jr  # noqa: E402
 from jaxrod.rod3d import Rod3D, step_limit  # noqa: E402
 from jaxrod.rod3d import sine_velocity  # noqa: E402
-from jaxrod.rod3d.experiments import e1_curves  # noqa: E402
+from jaxrod.experiments.rod3d import e1_curves  # noqa: E402
 from jaxrod.rod3d.so3 import skew  # noqa: E402
 
 

@@ -1,7 +1,5 @@
 """jaxrod: dynamics and stability of an elastic rod confined in a channel with dry friction."""
 
-from importlib.metadata import PackageNotFoundError, version
-
 from . import theory as theory
 from ._results import RESULTS as RESULTS
 from .friction import AbstractFriction as AbstractFriction
@@ -45,7 +43,4 @@ from .params import RodChannel as RodChannel
 from .simulate import simulate as simulate
 from .solution import Solution as Solution
 
-try:
-    __version__ = version("jaxrod")
-except PackageNotFoundError:  # pragma: no cover
-    __version__ = "0.0.0"
+from ._version import __version__ as __version__

@@ -232,7 +232,7 @@ def _simulate_rod3d(args, rod) -> int:
     from .integrators.base import save_grid
     from .modal import dominant_mode
     from .rod3d import Rod3D, sine_velocity, step_limit
-    from .rod3d.experiments import run
+    from .experiments.rod3d import run
 
     if args.perturbation != "sine":
         _fail(f"argument --perturbation: {args.perturbation!r} is not available with --model rod3d; use 'sine'.")
@@ -339,12 +339,9 @@ def _cmd_map(args) -> int:
 
 
 def _write_rows(path, rows):
-    import csv
+    from .output import write_csv
 
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(path, rows)
 
 
 def _cmd_boundary(args) -> int:
@@ -444,13 +441,11 @@ def _cmd_critical_load(args) -> int:
 
 
 def _plot_curve(path, x, y, ok, theory_y, p, se, c, xlabel, ylabel, scale, title):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    from .output import subplots
+
+    fig, ax = subplots(figsize=(6.4, 4.6))
     ax.plot(x[ok], scale * y[ok], "o", label="jaxrod (root search)")
     if theory_y is not None:
         ax.plot(x, scale * np.asarray(theory_y), "k--", label="single-mode theory")
@@ -465,7 +460,6 @@ def _plot_curve(path, x, y, ok, theory_y, p, se, c, xlabel, ylabel, scale, title
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def _cmd_reproduce(args) -> int:

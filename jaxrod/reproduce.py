@@ -10,7 +10,6 @@ boundary search ([`jaxrod.boundary`][]), not from grids; E3 is a map by definiti
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import os
@@ -19,29 +18,12 @@ import time
 import numpy as np
 
 from . import theory
+from .output import subplots, write_csv
 from .params import RodChannel
 
 __all__ = ["reproduce", "EXPERIMENTS"]
 
 EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "e6", "helix")
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _write_csv(path, rows):
-    if not rows:
-        return
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
 
 
 def _settings(quick) -> dict:
@@ -58,7 +40,7 @@ def _settings(quick) -> dict:
 # -- E1 (3D rod) ---------------------------------------------------------------------------------
 
 def e1(out, quick, progress):
-    from .rod3d.experiments import e1 as run_e1
+    from .experiments.rod3d import e1 as run_e1
 
     return run_e1(out, quick, progress)
 
@@ -142,8 +124,7 @@ def e4(out, quick, progress):
     n_used = s["n"] or default_nodes(rod, float(theory.frictionless_load(rod, 6)) + s["max_dF"])
     rows, res = [], {"model": "field", "n": n_used, "mu": mus.tolist(),
                      "dF_measured_from": f"F0_6 = {F0:.4f} N (F0cr continuous = {F0cr:.4f} N)"}
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = subplots(figsize=(7, 5))
     for label, kind, amp, reals, theory_exp in cases:
         t0 = time.perf_counter()
         rr, _ = critical_load_curve(mus, amp, perturbation=kind, realizations=reals, seed=4, n=s["n"],
@@ -176,8 +157,7 @@ def e4(out, quick, progress):
     ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e4_critical_load.png"), dpi=130)
-    plt.close(fig)
-    _write_csv(os.path.join(out, "e4_critical_load.csv"), rows)
+    write_csv(os.path.join(out, "e4_critical_load.csv"), rows)
     return res
 
 
@@ -195,8 +175,7 @@ def e5(out, quick, progress):
     R = s["realizations"]
     rod0 = RodChannel.reference()
     n = s["n"] or default_nodes(rod0, s["max_dF"])
-    plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, axes = subplots(1, 2, figsize=(12, 4.8))
     res = {"model": "field", "n": n}
     rows = []
     for kind, amp in (("random-velocity", 15e-3), ("random-position", 2.0)):
@@ -255,8 +234,7 @@ def e5(out, quick, progress):
     axes[1].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e5_modes.png"), dpi=130)
-    plt.close(fig)
-    _write_csv(os.path.join(out, "e5_modes.csv"), rows)
+    write_csv(os.path.join(out, "e5_modes.csv"), rows)
     return res
 
 
@@ -270,8 +248,7 @@ def e6(out, quick, progress):
 
     s = _settings(quick)
     n = s["n"] or 128
-    plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig, axes = subplots(1, 2, figsize=(12, 4.5))
     res = {"model": "field", "n": n}
     cases = [
         ("sine mode 6, μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s", 0.3, 5.0, make_perturbation("sine", 35e-3, 6)),
@@ -307,7 +284,7 @@ def e6(out, quick, progress):
                       "energy_balance_error": float(sol.energy_balance_error())}
         for mm, a, b in zip(m, p_before, p_after):
             rows.append(dict(case=label, mode=int(mm), power_before=a, power_after=b))
-    from .rod3d.experiments import SIZES, crosscheck_critical_velocity, e6_full, rolling_check
+    from .experiments.rod3d import SIZES, crosscheck_critical_velocity, e6_full, rolling_check
 
     res["full_model"] = e6_full(out, quick, progress)
     S = SIZES[quick]
@@ -324,15 +301,14 @@ def e6(out, quick, progress):
     fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e6_spectra.png"), dpi=130)
-    plt.close(fig)
-    _write_csv(os.path.join(out, "e6_spectra.csv"), rows)
+    write_csv(os.path.join(out, "e6_spectra.csv"), rows)
     return res
 
 
 # -- post-buckling (3D rod): helix, loading–unloading hysteresis --------------------------------
 
 def helix(out, quick, progress):
-    from .rod3d.helix import post_buckling
+    from .experiments.helix import post_buckling
 
     return post_buckling(out, quick, progress)
 

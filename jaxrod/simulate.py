@@ -54,9 +54,10 @@ def simulate(
         raise ValueError(f"t1 = {t1!r} is invalid: expected a finite float > 0 [s].")
     if not (isinstance(n_save, int) and n_save >= 2):
         raise ValueError(f"n_save = {n_save!r} is invalid: expected an int >= 2.")
-    if isinstance(integrator, AbstractFixedStep) and _is_concrete(model):
+    checked = isinstance(integrator, AbstractFixedStep) and _is_concrete(model)
+    if checked:
         with jax.ensure_compile_time_eval():  # concrete even inside a caller's jit
-            limit = np.asarray(eqx.filter_jit(integrator.step_limit)(model))
+            limit = np.asarray(_step_limit(integrator, model))
         if np.any(integrator.dt >= limit):
             raise ValueError(
                 f"{type(integrator).__name__}.dt = {integrator.dt!r} s is above the stability "
@@ -65,12 +66,20 @@ def simulate(
     # Initial values become arrays so that new values never trigger a recompilation.
     q0, v0 = as_state(q0), as_state(v0)
     options = RunOptions() if options is None else options
-    return _simulate(model, integrator, q0, v0, float(t1), n_save, options, throw)
+    return _simulate(model, integrator, q0, v0, float(t1), n_save, options, throw, checked)
 
 
 @eqx.filter_jit
-def _simulate(model, integrator, q0, v0, t1, n_save, options, throw):
-    sol = integrator.integrate(model, q0, v0, t1, n_save, options)
+def _step_limit(integrator, model):
+    return integrator.step_limit(model)
+
+
+@eqx.filter_jit
+def _simulate(model, integrator, q0, v0, t1, n_save, options, throw, checked):
+    if checked:  # the step limit was checked on the concrete model: not again inside the run
+        sol = integrator.integrate(model, q0, v0, t1, n_save, options, check_step_limit=False)
+    else:
+        sol = integrator.integrate(model, q0, v0, t1, n_save, options)
     result = jnp.where(model.check(), sol.result, RESULTS.invalid_input).astype(jnp.int32)
     sol = eqx.tree_at(lambda s: s.result, sol, result)
     if throw:

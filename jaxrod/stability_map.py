@@ -9,6 +9,7 @@ import os
 import numpy as np
 
 from . import theory
+from .output import subplots, write_csv
 from .params import RodChannel
 from .sweeps import SweepResult, SweepSpec, sweep
 
@@ -98,7 +99,7 @@ def stability_map(
     summary["dt"] = results[mus[0]].meta["dt"]
     if out is not None:
         os.makedirs(out, exist_ok=True)
-        _write_csv(os.path.join(out, "map.csv"), results)
+        write_csv(os.path.join(out, "map.csv"), _map_rows(results))
         with open(os.path.join(out, "map.json"), "w") as fh:
             json.dump(summary, fh, indent=1)
         plot_maps(results, summary, os.path.join(out, "map.png"))
@@ -135,28 +136,25 @@ def _summarise(res: SweepResult, dF, v0, mu) -> dict:
     }
 
 
-def _write_csv(path, results: dict) -> None:
-    with open(path, "w") as fh:
-        fh.write("mu,dF,v0,buckled,t_buckle,dominant_mode,max_theta,stuck,t_stop,result\n")
-        for mu, res in results.items():
-            o, i = res.outputs, res.inputs
-            for k in range(len(res)):
-                fh.write(
-                    f"{mu:g},{i['dF'][k]!r},{i['amplitude'][k]!r},{int(o['buckled'][k])},"
-                    f"{o['t_buckle'][k]!r},{int(o['dominant_mode'][k])},{o['max_theta'][k]!r},"
-                    f"{int(o['stuck'][k])},{o['t_stop'][k]!r},{int(o['result'][k])}\n"
-                )
+def _map_rows(results: dict) -> list[dict]:
+    """One row per member of every μ's map: plain numbers (μ, ΔF [N], v₀ [m/s], labels, times
+    [s], amplitudes [rad], result code)."""
+    rows = []
+    for mu, res in results.items():
+        o, i = res.outputs, res.inputs
+        for k in range(len(res)):
+            rows.append(dict(mu=mu, dF=i["dF"][k], v0=i["amplitude"][k], buckled=o["buckled"][k],
+                             t_buckle=o["t_buckle"][k], dominant_mode=o["dominant_mode"][k],
+                             max_theta=o["max_theta"][k], stuck=o["stuck"][k], t_stop=o["t_stop"][k],
+                             result=o["result"][k]))
+    return rows
 
 
 def plot_maps(results: dict, summary: dict, path: str) -> None:
     """One panel per μ: stable (circles) / buckled (crosses), P6 theory, fitted boundary."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     mus = list(results)
-    fig, axes = plt.subplots(1, len(mus), figsize=(6.2 * len(mus), 5.0), squeeze=False)
+    fig, axes = subplots(1, len(mus), figsize=(6.2 * len(mus), 5.0), squeeze=False)
     dF = np.asarray(summary["dF"])
     v0 = np.asarray(summary["v0"])
     fine = np.geomspace(dF.min(), dF.max(), 200)
@@ -193,4 +191,3 @@ def plot_maps(results: dict, summary: dict, path: str) -> None:
                  f"dt = {summary['dt']:.2e} s, horizon {summary['t1']:g} s)", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
-    plt.close(fig)

@@ -665,7 +665,7 @@ def _dump_json(meta, f):
 
 
 def _version() -> str:
-    from . import __version__
+    from ._version import __version__
 
     return __version__
 

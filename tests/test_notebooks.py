@@ -1,4 +1,5 @@
-"""Every notebook runs top to bottom in its small setting (JAXROD_NB_SMALL=1)."""
+"""Every notebook runs top to bottom in its small setting (JAXROD_NB_SMALL=1): the quick-start
+notebook in the default suite, the others (75 s together) under `slow`."""
 
 import os
 import pathlib
@@ -15,7 +16,8 @@ def test_all_six_notebooks_are_there():
     assert [p.stem[:2] for p in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06"]
 
 
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", [p if p.stem.startswith("01") else pytest.param(p, marks=pytest.mark.slow)
+                                  for p in NOTEBOOKS], ids=lambda p: p.stem)
 def test_notebook_runs(path, tmp_path, monkeypatch):
     monkeypatch.setenv("JAXROD_NB_SMALL", "1")
     monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")

@@ -1,4 +1,5 @@
-"""Structure and sanity of `results.json` from a tiny run (not specific expected values)."""
+"""Structure and sanity of `results.json` from a tiny run (not specific expected values). The
+whole reproduction (every experiment, 2.5 min) is `slow`; the default suite runs E2 and E3."""
 
 import json
 import math
@@ -15,6 +16,7 @@ def results(tmp_path_factory):
     return out, res
 
 
+@pytest.mark.slow
 def test_every_experiment_writes_figures_data_and_numbers(results):
     out, res = results
     assert set(res) == {"e1", "e2", "e3", "e4", "e5", "e6", "helix"}
@@ -26,6 +28,7 @@ def test_every_experiment_writes_figures_data_and_numbers(results):
         assert (out / f).stat().st_size > 0, f
 
 
+@pytest.mark.slow
 def test_exponents_are_finite_and_frictionless_loads_vanish(results):
     _, res = results
     assert math.isfinite(res["e3"]["boundary_exponent"]) and res["e3"]["boundary_exponent"] < 0
@@ -41,6 +44,7 @@ def test_exponents_are_finite_and_frictionless_loads_vanish(results):
         assert all(f > abs(entry["frictionless_dF_star"]) for f in entry["dF_star"] if f == f), label
 
 
+@pytest.mark.slow
 def test_buckling_modes_do_not_fall_below_the_frictionless_mode(results):
     _, res = results
     for kind in ("random-velocity", "random-position"):
@@ -53,6 +57,7 @@ def test_buckling_modes_do_not_fall_below_the_frictionless_mode(results):
     assert sine["dominant_mode_after"] == 6
 
 
+@pytest.mark.slow
 def test_full_model_e1_and_e6_are_sane(results):
     """E1: every rod buckles within the horizon, friction raises the critical force above the
     frictionless one at every v₀, and the frictionless one is not below F⁰₆. E6 (3D rod): the
@@ -70,6 +75,7 @@ def test_full_model_e1_and_e6_are_sane(results):
     assert e6["energy_balance_max_J"] < 1e-2 * e6["dissipated_J"]
 
 
+@pytest.mark.slow
 def test_post_buckling_cycle_closes_its_energy_balance(results):
     """The load–hold–unload–hold cycle: the energy balance closes over the whole path, the
     friction cycle dissipates more than the frictionless one, and the pushed end comes back."""
@@ -80,3 +86,16 @@ def test_post_buckling_cycle_closes_its_energy_balance(results):
         assert h[mu]["loop_area_J"] > 0, mu
     assert h["mu=0.3"]["dissipated_J"] > h["mu=0.0"]["dissipated_J"]
     assert h["theory"]["onset_chen"] < h["theory"]["onset_mitchell"]
+
+
+def test_quick_reproduction_of_e2_and_e3(tmp_path):
+    """The default suite's version: E2 (phase portrait) and E3 (map) in their tiny setting write
+    their figures, data and numbers; the map's exponent is negative and μ = 0 buckles for every
+    ΔF > 0, as in the full run."""
+    res = reproduce(["e2", "e3"], str(tmp_path), quick="tiny", progress=False)
+    assert set(res) == {"e2", "e3"}
+    assert json.loads((tmp_path / "results.json").read_text()).keys() == res.keys()
+    for f in ("e2/phase.png", "e3/map.png", "e3/map.json"):
+        assert (tmp_path / f).stat().st_size > 0, f
+    assert math.isfinite(res["e3"]["boundary_exponent"]) and res["e3"]["boundary_exponent"] < 0
+    assert res["e3"]["frictionless_buckles_for_every_dF_gt_0"] is True

@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 import jaxrod as jr
-from jaxrod.rod3d.helix import helix_measures, helix_theory, load_path
+from jaxrod.experiments.helix import helix_measures, helix_theory, load_path
 
 
 def test_helix_measures_recover_an_exact_helix():

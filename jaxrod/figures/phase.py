@@ -12,6 +12,7 @@ import numpy as np
 from .. import theory
 from ..integrators import Exact, ProjectedVerlet
 from ..models import SingleMode
+from ..output import subplots
 from ..simulate import simulate
 
 __all__ = ["phase_portraits", "classify_grid"]
@@ -62,16 +63,12 @@ def phase_portraits(out_dir: str, n_grid: int = 24, extent: float = 4.0) -> dict
     **Returns:** a dict with, per case, the fraction of grid points where the simulated and
     analytic classifications agree.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.patches import Polygon
 
     os.makedirs(out_dir, exist_ok=True)
     g = np.linspace(-extent, extent, n_grid)
     AA, VV = np.meshgrid(g, g)
-    fig, axes = plt.subplots(2, 3, figsize=(13, 8.2), sharex=True, sharey=True)
+    fig, axes = subplots(2, 3, figsize=(13, 8.2), sharex=True, sharey=True)
     starts = [(a, v) for a in (-3.0, -1.5, 0.0, 1.5, 3.0) for v in (-2.5, -1.0, 1.0, 2.5)]
     starts += [(2.0, 0.0), (-0.5, 0.0), (0.0, 0.5), (0.0, 0.99), (0.0, 1.01)]
     agreement = {}
@@ -124,7 +121,6 @@ def phase_portraits(out_dir: str, n_grid: int = 24, extent: float = 4.0) -> dict
     )
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, "phase.png"), dpi=130)
-    plt.close(fig)
     with open(os.path.join(out_dir, "phase.csv"), "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["k", "f", "A0", "Adot0", "stable_simulated", "stable_theory"])

@@ -5,22 +5,19 @@ from __future__ import annotations
 import numpy as np
 
 from ..modal import modal_spectrum
+from ..output import subplots
 
 
 def plot_simulation(scene, sol, path: str) -> None:
     """Write a PNG with θ(s,t) (left) and the modal power spectrum at the start, the middle and
     the end of the run (right)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     s, theta = (np.asarray(x) for x in scene.field_of(sol.q))
     ts = np.asarray(sol.ts)
     stop = float(sol.t_stop)
     keep = ts <= stop + 1e-12
     keep[: min(2, len(keep))] = True  # at least two frames, also for a rod stuck at once
-    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(12, 4.5), gridspec_kw={"width_ratios": [1.4, 1]})
+    fig, (ax0, ax1) = subplots(1, 2, figsize=(12, 4.5), gridspec_kw={"width_ratios": [1.4, 1]})
     vmax = max(float(np.max(np.abs(theta[keep]))), 1e-12)
     im = ax0.imshow(
         theta[keep].T, aspect="auto", origin="lower", cmap="RdBu_r", vmin=-vmax, vmax=vmax,
@@ -47,7 +44,6 @@ def plot_simulation(scene, sol, path: str) -> None:
         ax1.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def _resample(s, theta, L, n=128):

@@ -210,7 +210,7 @@ class AbstractFixedStep(AbstractIntegrator):
             amp_max=keep(s.amp_max, jnp.where(at_save | stopped, jnp.maximum(s.amp_max, amp), s.amp_max)),
         )
 
-    def integrate(self, model, q0, v0, t1, n_save, options=RunOptions()):
+    def integrate(self, model, q0, v0, t1, n_save, options=RunOptions(), check_step_limit=True):
         m, h = save_grid(t1, n_save, self.dt)
         dtype = jnp.result_type(float)
         h = jnp.asarray(h, dtype)
@@ -279,15 +279,18 @@ class AbstractFixedStep(AbstractIntegrator):
             t_stop=s.stop_time(t1, n_save),
             q_final=s.q,
             v_final=s.v,
-            result=self.result(model, s, h),
+            result=self.result(model, s, h, check_step_limit),
             n_steps=s.steps,
         )
 
-    def result(self, model, s: RunState, h) -> Array:
-        """The [`jaxrod.RESULTS`][] code of a finished run."""
+    def result(self, model, s: RunState, h, check_step_limit: bool = True) -> Array:
+        """The [`jaxrod.RESULTS`][] code of a finished run (`check_step_limit=False` when the
+        step was already checked against the limit of the concrete model: for the 3D rod the
+        limit is a power iteration that costs seconds of compilation)."""
         finite = _all_finite((s.q, s.v))
+        too_big = h >= self.step_limit(model) if check_step_limit else False
         return jnp.where(
-            h >= self.step_limit(model),
+            too_big,
             RESULTS.step_limit,
             jnp.where(finite, RESULTS.successful, RESULTS.nonfinite),
         ).astype(jnp.int32)

@@ -15,9 +15,9 @@ from .. import theory
 from ..params import RodChannel
 from ..integrators import ProjectedVerlet
 from ..integrators.base import RunOptions
-from ..reproduce import _plt, _write_csv
+from ..output import subplots, write_csv
 from ..simulate import simulate
-from .model import Rod3D, sine_velocity, step_limit
+from ..rod3d.model import Rod3D, sine_velocity, step_limit
 
 __all__ = ["run", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "rolling_check", "SIZES"]
 
@@ -90,8 +90,7 @@ def e1(out, quick=False, progress=True):
     """E1: displacement control at 1 mm/s, μ = 0 and 0.3, v₀ over `SIZES`; the critical force
     against v₀; its convergence in the segment count at μ = 0.3, v₀ = 15 mm/s."""
     S = SIZES[quick]
-    plt = _plt()
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    fig, axes = subplots(1, 3, figsize=(15, 4.5))
     res = {"model": "rod3d", "n_segments": S["n"], "speed_m_s": 1e-3, "v0_m_s": list(S["v0s"])}
     rows = []
     F0 = float(theory.frictionless_load(RodChannel.reference(0.0), 6))
@@ -130,8 +129,7 @@ def e1(out, quick=False, progress=True):
     axes[2].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e1_force_displacement.png"), dpi=130)
-    plt.close(fig)
-    _write_csv(os.path.join(out, "e1_force_displacement.csv"), rows)
+    write_csv(os.path.join(out, "e1_force_displacement.csv"), rows)
     return res
 
 
@@ -180,8 +178,7 @@ def e6_full(out, quick=False, progress=True):
         "energy_balance_max_J": float(np.max(np.abs(np.asarray(sol.energy_balance)))),
         "dissipated_J": float(sol.dissipated[-1]),
     }
-    plt = _plt()
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    fig, axes = subplots(1, 3, figsize=(15, 4.2))
     axes[0].semilogy(ts * 1e3, E["twist"] / total, label="twist / total")
     axes[0].semilogy(ts * 1e3, E["shear"] / total, label="shear / total")
     axes[0].semilogy(ts * 1e3, E["bend"] / total, label="bend / total")
@@ -204,10 +201,9 @@ def e6_full(out, quick=False, progress=True):
     axes[2].set_title("modal power of θ, before and after buckling", fontsize=9)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e6_full_model.png"), dpi=130)
-    plt.close(fig)
     gap = np.asarray(sol.observables["gap"])
     rows = [dict(t=t, **{k: E[k][i] for k in E}, gap=float(gap[i]), amplitude=amp[i]) for i, t in enumerate(ts)]
-    _write_csv(os.path.join(out, "e6_full_model.csv"), rows)
+    write_csv(os.path.join(out, "e6_full_model.csv"), rows)
     return res
 
 

@@ -33,7 +33,8 @@ import numpy as np
 from .. import theory
 from ..params import RodChannel
 from ..integrators.base import save_grid
-from .model import Rod3D, step_limit
+from ..output import subplots, write_csv
+from ..rod3d.model import Rod3D, step_limit
 
 __all__ = ["load_path", "helix_measures", "helix_theory", "post_buckling", "HELIX_SIZES"]
 
@@ -67,7 +68,7 @@ def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset:
     parts, d0, D0, W0 = [], 0.0, 0.0, 0.0
     model = Rod3D(rod, n, control="displacement", damping=damping)
     s = jnp.arange(n + 1) / n
-    from .experiments import run
+    from .rod3d import run
 
     state = model.initial_state(0.0, lateral_offset=offset * jnp.sin(6 * jnp.pi * s))
     dts, t0 = [], 0.0
@@ -203,16 +204,13 @@ def post_buckling(out, quick=False, progress=True) -> dict:
     res["theory"] = th
     if out is not None:
         _figure(out, runs, th, n)
-        from ..reproduce import _write_csv
-        _write_csv(os.path.join(out, "helix_post_buckling.csv"), rows)
+        write_csv(os.path.join(out, "helix_post_buckling.csv"), rows)
     return res
 
 
 def _figure(out, runs, th, n):
-    from ..reproduce import _plt
 
-    plt = _plt()
-    fig, axes = plt.subplots(1, 4, figsize=(21, 4.6))
+    fig, axes = subplots(1, 4, figsize=(21, 4.6))
     for mu, (p, h) in runs.items():
         axes[0].plot(p["d"] * 1e3, p["reaction"], lw=0.9, label=f"μ = {mu}")
         axes[1].plot(p["ts"], h["turns"], lw=0.9, label=f"μ = {mu}")
@@ -253,4 +251,3 @@ def _figure(out, runs, th, n):
     axes[3].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "helix_post_buckling.png"), dpi=130)
-    plt.close(fig)
