@@ -480,7 +480,10 @@ def _cmd_reproduce(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from ._version import __version__
+
     p = _Parser(prog="jaxrod", description="Dynamics and stability of a rod in a channel with dry friction.")
+    p.add_argument("--version", action="version", version=f"jaxrod {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     t = sub.add_parser("theory", help="analytic loads and stable-zone intercepts (PHYSICS.md P3-P7)")

@@ -164,3 +164,13 @@ def test_map_bad_range(capsys):
     with pytest.raises(SystemExit):
         main(["map", "--dF", "5:1:3"])
     assert "--dF" in capsys.readouterr().err
+
+
+def test_version(capsys):
+    import jaxrod
+    from jaxrod.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"jaxrod {jaxrod.__version__}"
