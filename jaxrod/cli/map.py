@@ -1,0 +1,46 @@
+"""`jaxrod map`: the E3 stability map (the main job)."""
+
+from __future__ import annotations
+
+import math
+
+from ._common import _fail
+
+
+def _cmd_map(args) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    import numpy as np
+
+    from ..stability_map import stability_map
+
+    if args.mu is not None and args.mu < 0:
+        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
+    if np.any(args.v0 <= 0):
+        _fail(f"argument --v0: velocities must be > 0 m/s, got {args.v0.min()!r}.")
+    mus = (0.3, 0.0) if args.mu is None else (args.mu,)
+    print(f"stability map: {args.model} model, mu = {', '.join(f'{m:g}' for m in mus)}, "
+          f"{len(args.dF)} x {len(args.v0)} grid, {jax.local_device_count()} device(s) "
+          f"({jax.devices()[0].platform})")
+    try:
+        s = stability_map(mus, args.dF, args.v0, args.model, args.n, 6, args.out,
+                          progress=not args.quiet, t1=args.t1)
+    except ValueError as err:
+        _fail(str(err))
+    print(f"n = {s['n']}, dt = {s['dt']:.3e} s; wrote {args.out}/map.png, map.csv, map.json")
+    for key, m in s["maps"].items():
+        line = f"  mu = {key}: {m['buckled']} buckled, {m['stable']} stable"
+        if m["failed"]:
+            line += f", {m['failed']} failed"
+        print(line)
+        if m["mu"] > 0:
+            if math.isfinite(m["exponent"]):
+                print(f"    boundary v0 ~ dF^p with p = {m['exponent']:.3f} +/- {m['exponent_stderr']:.3f} "
+                      f"(theory -1/2), from {len(m['boundary_dF'])} columns")
+            else:
+                print("    no boundary crossing inside the grid: widen --v0 or --dF")
+        largest = m["largest_stable_dF_over_F0cr"]
+        print("    largest stable dF/F0cr seen: " + (f"{largest:.2f}" if largest is not None else "none (buckles everywhere)"))
+    return 0
+

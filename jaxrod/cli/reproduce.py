@@ -1,0 +1,23 @@
+"""`jaxrod reproduce`: the paper's experiments."""
+
+from __future__ import annotations
+
+from ._common import _fail
+
+
+def _cmd_reproduce(args) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from ..reproduce import reproduce
+
+    which = ["all"] if "all" in args.which else args.which
+    try:
+        res = reproduce(which, args.out, quick=args.quick, progress=not args.quiet)
+    except ValueError as err:
+        _fail(str(err))
+    print(f"wrote {args.out}/results.json and figures under {args.out}/<experiment>/")
+    for name, r in res.items():
+        print(f"  {name}: {r.get('seconds', '?')} s")
+    return 0
+

@@ -1,0 +1,136 @@
+"""`jaxrod simulate`: one rod (single mode, Galerkin, field or the 3D rod)."""
+
+from __future__ import annotations
+
+import json
+
+from ._common import _fail, _rod_from_args, _json_number
+
+
+def _cmd_simulate(args) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    import jax.numpy as jnp
+
+    from ..scene import Scene, make_perturbation
+
+    if args.mu < 0:
+        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
+    if args.amplitude < 0:
+        _fail(f"argument --amplitude: {args.amplitude!r} is invalid: expected >= 0.")
+    if args.t1 <= 0:
+        _fail(f"argument --t1: {args.t1!r} is invalid: expected > 0 s.")
+    if args.dt is not None and args.dt <= 0:
+        _fail(f"argument --dt: {args.dt!r} is invalid: expected > 0 s.")
+    if args.model == "field" and args.n is not None and args.n < 4:
+        _fail(f"argument --n: {args.n!r} is invalid: the field model needs >= 4 nodes.")
+    rod = _rod_from_args(args, args.mu)
+    if args.model == "rod3d":
+        return _simulate_rod3d(args, rod)
+    pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
+    scene = Scene(rod, args.dF, pert, args.model, args.n, args.mode, args.dt)
+    try:
+        sol = scene.run(t1=args.t1, n_save=args.n_save, save_state=True, throw=False)
+    except ValueError as err:
+        _fail(str(err))
+    from .._results import RESULTS
+
+    out = {
+        "model": args.model,
+        "perturbation": args.perturbation,
+        "amplitude": args.amplitude,
+        "mu": args.mu,
+        "dF": args.dF,
+        "F": float(scene.F),
+        "n": None if args.model == "mode" else (scene.nodes() if args.model == "field" else scene.model().n_modes),
+        "dt": scene.step(),
+        "t1": args.t1,
+        "buckled": bool(sol.buckled),
+        "t_buckle": _json_number(sol.t_buckle),
+        "dominant_mode": int(scene.dominant_mode(sol.q_final)),
+        "max_theta": float(jnp.max(sol.amplitude)),
+        "stuck": bool(sol.stuck[-1]),
+        "t_stop": float(sol.t_stop),
+        "energy_balance_error": float(sol.energy_balance_error()),
+        "result": RESULTS.describe(sol.result),
+    }
+    if args.plot:
+        from ..figures.simulation import plot_simulation
+
+        plot_simulation(scene, sol, args.plot)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        verdict = "BUCKLED" if out["buckled"] else ("stuck (stable)" if out["stuck"] else "not buckled")
+        print(f"{args.model} model, F = {out['F']:.4g} N (dF = {args.dF:g} N), mu = {args.mu:g}, "
+              f"{args.perturbation} amplitude {args.amplitude:g}: {verdict}")
+        if out["buckled"]:
+            print(f"  t_buckle = {out['t_buckle']:.4g} s, dominant mode {out['dominant_mode']}")
+        else:
+            print(f"  stopped at t = {out['t_stop']:.4g} s, dominant mode {out['dominant_mode']}")
+        print(f"  max |theta| = {out['max_theta']:.4g} rad, energy balance error "
+              f"{out['energy_balance_error']:.2e}, result: {out['result']}")
+        if args.plot:
+            print(f"  wrote {args.plot}")
+    return 0 if int(sol.result) == 0 else 1
+
+
+def _simulate_rod3d(args, rod) -> int:
+    """`jaxrod simulate --model rod3d`: the 3D rod with a sine lateral velocity perturbation."""
+    import numpy as np
+
+    from .. import theory
+    from .._results import RESULTS
+    from ..integrators.base import save_grid
+    from ..modal import dominant_mode
+    from ..rod3d import Rod3D, sine_velocity, step_limit
+    from ..experiments.rod3d import run
+
+    if args.perturbation != "sine":
+        _fail(f"argument --perturbation: {args.perturbation!r} is not available with --model rod3d; use 'sine'.")
+    if args.speed < 0:
+        _fail(f"argument --speed: {args.speed!r} is invalid: expected >= 0 m/s.")
+    n = 60 if args.n is None else args.n
+    if n < 4:
+        _fail(f"argument --n: {n!r} is invalid: the 3D rod needs >= 4 segments.")
+    F = float(theory.frictionless_load(rod, 6)) + args.dF if args.control != "displacement" else 0.0
+    model = Rod3D(rod, n, control=args.control, speed=args.speed, end_load=F if args.control == "load" else 0.0)
+    q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
+    n_save = min(args.n_save, 1001)
+    limit = step_limit(model, q0)
+    if args.dt is not None and not (0 < args.dt < limit):
+        _fail(f"argument --dt: {args.dt!r} s is invalid: the explicit step limit of this rod is {limit:.4g} s; "
+              f"use 0 < dt < {limit:.4g} s.")
+    dt = 0.5 * limit if args.dt is None else args.dt
+    try:
+        sol = run(model, q0, v0, args.t1, n_save, dt, stop_on_buckle=args.control != "displacement",
+                  stop_when_stuck=args.control != "displacement")
+    except ValueError as err:
+        _fail(str(err))
+    R = np.asarray(sol.observables["reaction"][:, 1])
+    end_x = np.asarray(sol.observables["end_x"])
+    i = int(np.argmax(R))
+    out = {
+        "model": "rod3d", "control": args.control, "n_segments": n, "perturbation": "sine",
+        "amplitude": args.amplitude, "mu": args.mu, "dF": args.dF if args.control != "displacement" else None,
+        "F": F, "speed": args.speed if args.control == "displacement" else None,
+        "dt": save_grid(args.t1, n_save, dt)[1], "t1": args.t1,
+        "buckled": bool(sol.buckled), "t_buckle": _json_number(sol.t_buckle),
+        "max_theta": float(np.max(np.asarray(sol.amplitude))),
+        "dominant_mode": int(dominant_mode(sol.observables["theta"][-1, 1:-1])),
+        "peak_reaction": float(R[i]), "end_displacement_at_peak": float(end_x[0] - end_x[i]),
+        "twist_over_total_max": float(np.max(np.asarray(sol.energies["twist"] / sum(sol.energies.values())))),
+        "energy_balance_error": float(np.max(np.abs(np.asarray(sol.energy_balance)))),
+        "result": RESULTS.describe(sol.result),
+    }
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"rod3d ({n} segments, {args.control} control), mu = {args.mu:g}, sine mode {args.mode} "
+              f"amplitude {args.amplitude:g} m/s: {'BUCKLED' if out['buckled'] else 'not buckled'}")
+        print(f"  max |theta| = {out['max_theta']:.4g} rad, peak reaction {out['peak_reaction']:.4g} N, "
+              f"dominant mode {out['dominant_mode']}, energy balance error {out['energy_balance_error']:.2e} J, "
+              f"result: {out['result']}")
+    return 0 if int(sol.result) == 0 else 1
+
