@@ -53,7 +53,8 @@ def child(scenes: list[str], repeats: int, loop_members: int) -> list[dict]:
     import numpy as np
 
     from jaxrod.integrators.base import save_grid
-    from jaxrod.sweeps import N_SAVE, SweepSpec, _make_member, _static_resolution, sweep
+    from jaxrod.sweeps import N_SAVE, SweepSpec, sweep
+    from jaxrod.sweeps.member import _make_member, _static_resolution
 
     dev = jax.local_device_count()
     rows = []

@@ -108,5 +108,5 @@ def test_the_checker_sees_a_real_import():
     """The parser is not vacuous: it finds the edges everyone knows are there."""
     graph = _graph()
     assert "models.base" in graph["integrators.base"]
-    assert "batching" in graph["sweeps"]
+    assert "batching" in graph["sweeps.run"]
     assert "rod3d" in graph["scene"] or "rod3d.model" in graph["scene"]

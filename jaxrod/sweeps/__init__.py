@@ -1,0 +1,27 @@
+"""Monte Carlo sweeps: continuous batching on every device, chunked, resumable, with progress.
+
+The package: `spec` (what a sweep is), `member` (one member on the engine), `run` (`sweep`),
+`result` (`SweepResult`), `store` (the sweep's folder).
+
+`sweep(spec, inputs)` runs one perturbed rod per member of a batch of parameter points and
+returns a [`jaxrod.SweepResult`][] of per-member arrays. Inside a chunk the members are vmapped;
+each chunk's batch axis is sharded over every local device (`jax.sharding.NamedSharding` over a
+one-axis `Mesh`); every chunk has the same shape (the last one is padded), so the sweep compiles
+once. With a `path`, every finished chunk is written atomically and a re-run skips it.
+
+**Multi-host use.** Start every process with `jax.distributed.initialize()` and give each one a
+disjoint member range (`members=range(start, stop)`, e.g. split by `jax.process_index()`) and
+its own `path`; results depend only on the global member index (random keys are
+`fold_in(key(seed), index)`), so the parts concatenate into the single-host result
+(`SweepResult.concatenate`). Within a process the chunk is sharded over its local devices.
+"""
+
+from .member import N_SAVE as N_SAVE
+from .result import SweepResult as SweepResult
+from .result import wilson_interval as wilson_interval
+from .run import sweep as sweep
+from .spec import OUTPUTS as OUTPUTS
+from .spec import PARAMETERS as PARAMETERS
+from .spec import SweepSpec as SweepSpec
+
+__all__ = ["SweepSpec", "SweepResult", "sweep", "PARAMETERS", "OUTPUTS", "N_SAVE", "wilson_interval"]

@@ -1,0 +1,190 @@
+"""One sweep member: its rod, load, perturbation and validity from the swept values, its run on
+the fixed-step engine, its outputs; and the static resolution (n, dt) of a sweep."""
+
+from __future__ import annotations
+
+import functools
+import json
+from collections.abc import Mapping
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import theory
+from .._results import RESULTS
+from ..integrators import ProjectedVerlet
+from ..integrators.base import RunOptions, save_grid
+from ..modal import dominant_mode
+from ..params import RodChannel
+from ..scene import DEFAULT_SEGMENTS, Scene, default_nodes, make_perturbation
+from .spec import ROD_FIELDS, SweepSpec, _STIFFNESS_FIELDS
+
+__all__ = ['N_SAVE']
+
+
+def _member_rod(spec: SweepSpec, p: Mapping[str, jax.Array]) -> RodChannel:
+    base = RodChannel.reference(mu=spec.mu, **spec.rod)
+    vals = {f: getattr(base, f) for f in ROD_FIELDS}
+    if "mu" in p:
+        vals["mu_s"] = vals["mu_d"] = p["mu"]
+    for f in ROD_FIELDS:
+        if f in p:
+            vals[f] = p[f]
+    return RodChannel(**vals)
+
+
+def _valid(rod: RodChannel, p) -> jax.Array:
+    pos = [rod.L, rod.d, rod.E, rod.rho_v, rod.R, rod.g]
+    ok = jnp.all(jnp.stack([jnp.isfinite(x) & (x > 0) for x in pos]))
+    ok &= (rod.nu > -1) & (rod.nu < 0.5)
+    ok &= jnp.isfinite(rod.mu_s) & jnp.isfinite(rod.mu_d) & (rod.mu_d >= 0) & (rod.mu_d <= rod.mu_s)
+    for k in ("dF", "amplitude"):
+        if k in p:
+            ok &= jnp.isfinite(p[k])
+    if "amplitude" in p:
+        ok &= p["amplitude"] >= 0
+    return ok
+
+
+def _member_inputs(spec: SweepSpec, p, index, base_key):
+    """A member's validity flag, its rod (the reference rod where invalid, so that an invalid
+    member stays finite and cannot disturb the batch; it is flagged afterwards), ΔF, amplitude
+    and random key."""
+    rod = _member_rod(spec, p)
+    ok = _valid(rod, p)
+    safe = jax.tree_util.tree_map(
+        lambda x, r: jnp.where(ok, x, r), rod, RodChannel.reference(mu=spec.mu, **spec.rod)
+    )
+    dF = jnp.where(ok, p.get("dF", spec.dF), spec.dF)
+    amp = jnp.where(ok, p.get("amplitude", spec.amplitude), spec.amplitude)
+    return ok, safe, dF, amp, jax.random.fold_in(base_key, index)
+
+
+N_SAVE = 201  # the stick test runs at every save, so a stuck member stops within t1/200
+
+
+def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
+    """A member in three pure parts: `setup(params, index, base_key)` gives its model and its
+    [`RunState`][jaxrod.integrators.base.RunState] at t = 0, the fixed-step engine advances it
+    (`advance`, `finished`), `outputs(ok, model, run)` summarises it. Every model, 3D included."""
+    integrator = ProjectedVerlet(dt)
+    opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
+    m, h = save_grid(spec.t1, N_SAVE, dt)
+
+    def setup(p, index, base_key):
+        ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
+        pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
+        scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
+                      grid_dt=grid_dt)
+        model = scene.model()
+        q0, v0 = scene.initial_state()
+        return ok, model, integrator.start(model, q0, v0, opts)
+
+    def advance(model, run):
+        return integrator.advance(model, run, jnp.asarray(h, run.t.dtype), m, N_SAVE, opts)
+
+    def finished(run):
+        return run.finished(N_SAVE)
+
+    def outputs(ok, model, run):
+        if spec.model == "field":
+            dom = dominant_mode(run.q)
+        elif spec.model == "rod3d":
+            dom = dominant_mode(model.theta(run.q.x)[1:-1])
+        elif spec.model == "galerkin":
+            dom = jnp.argmax(jnp.abs(run.q)) + 1
+        else:
+            dom = jnp.asarray(spec.mode)
+        code = integrator.result(model, run, jnp.asarray(h, run.t.dtype))
+        result = jnp.where(ok & model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
+        return {
+            "buckled": run.buckled & (result == 0),
+            "t_buckle": run.t_buckle,
+            "dominant_mode": dom.astype(jnp.int32),
+            "max_theta": run.amp_max,
+            "final_theta": model.amplitude(run.q),
+            "stuck": run.stuck,
+            "t_stop": run.stop_time(spec.t1, N_SAVE),
+            "result": result,
+            "steps": run.steps,
+        }
+
+    return setup, advance, finished, outputs
+
+
+def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
+    """The pure per-member function `member(params, index, base_key) -> outputs` (one whole run:
+    the "chunk" scheduling, and single runs)."""
+    setup, advance, finished, outputs = _engine_member(spec, n, dt, grid_dt)
+
+    m, _ = save_grid(spec.t1, N_SAVE, dt)
+
+    def member(p, index, base_key):
+        ok, model, run = setup(p, index, base_key)
+        interval = lambda r: jax.lax.fori_loop(0, m, lambda _, r: advance(model, r), r)
+        return outputs(ok, model, jax.lax.while_loop(lambda r: ~finished(r), interval, run))
+
+    return member
+
+
+def _static_resolution(spec: SweepSpec, flat: dict[str, np.ndarray]):
+    """n and dt from the concrete inputs: the largest load sets n, the stiffest valid member dt.
+    Depends only on the spec, the distinct stiffness values and the largest ΔF, and is cached
+    on them (it evaluates the models eagerly: a few ms, much of a small sweep)."""
+    stiff = [f for f in _STIFFNESS_FIELDS if f in flat]
+    values = np.unique(np.stack([np.asarray(flat[f], float) for f in stiff], -1), axis=0) if stiff else None
+    dF = flat.get("dF", np.array([spec.dF]))
+    dF_max = float(np.nanmax(np.where(np.isfinite(dF), dF, -np.inf)))
+    key = None if values is None else tuple(map(tuple, values.tolist()))
+    return _resolution(json.dumps(spec.to_json(), sort_keys=True), tuple(stiff), key, dF_max)
+
+
+@functools.lru_cache(maxsize=64)
+def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
+    import jax.numpy as jnp_
+
+    spec = SweepSpec(**json.loads(spec_json))
+
+    def rod_of(row):
+        try:
+            return RodChannel.reference(mu=spec.mu, **{**dict(spec.rod), **dict(zip(stiff, row))})
+        except ValueError:
+            return None
+
+    if values is not None:
+        rods = [r for r in map(rod_of, values) if r is not None]
+    else:
+        rods = [RodChannel.reference(mu=spec.mu, **spec.rod)]
+    if not rods:
+        raise ValueError("no member of the sweep has valid rod parameters.")
+    n = spec.n
+    if spec.model == "field" and n is None:
+        n = max(default_nodes(r, theory.frictionless_load(r, theory.critical_mode(r)) + dF_max) for r in rods)
+    if spec.model == "galerkin" and n is None:
+        n = 32
+    if spec.model == "rod3d":
+        return _rod3d_resolution(spec, rods, dF_max)
+    dt = spec.dt
+    if dt is None:
+        dt = min(Scene(r, jnp_.asarray(dF_max), kind=spec.model, n=n, mode=spec.mode).step() for r in rods)
+    grid_dt = min(Scene(r, jnp_.asarray(dF_max), kind="field", n=128).step() for r in rods)
+    return n, float(dt), float(grid_dt)
+
+
+def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
+    """n (default 60 segments, E1/E6's) and dt: 0.5 of the smallest explicit limit over the
+    rods at the largest load (a given `spec.dt` must lie below it)."""
+    from ..rod3d.model import Rod3D, step_limit
+
+    n = spec.n or DEFAULT_SEGMENTS
+    limits = []
+    for r in rods:
+        F = float(theory.frictionless_load(r, theory.critical_mode(r))) + dF_max
+        limits.append(step_limit(Rod3D(r, n, control="load", end_load=F)))
+    limit = min(limits)
+    if spec.dt is not None and not (0 < spec.dt < limit):
+        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model 'rod3d': the explicit step limit "
+                         f"is {limit:.4g} s; use 0 < dt < {limit:.4g} s.")
+    return n, float(spec.dt or 0.5 * limit), 0.0
+

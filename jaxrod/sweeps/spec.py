@@ -1,0 +1,81 @@
+"""What a sweep is, apart from its swept values: `SweepSpec`, the names a sweep takes and the outputs it gives."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+
+from ..scene import MODELS, PERTURBATIONS
+
+__all__ = ['ROD_FIELDS', 'PARAMETERS', 'OUTPUTS', 'SweepSpec']
+
+
+ROD_FIELDS = ("L", "d", "E", "rho_v", "nu", "R", "g", "mu_s", "mu_d")
+
+
+PARAMETERS = ("dF", "amplitude", "mu", "realization") + ROD_FIELDS
+
+
+_STIFFNESS_FIELDS = ("L", "d", "E", "rho_v", "R", "g")  # set the step limit
+
+
+OUTPUTS = ("buckled", "t_buckle", "dominant_mode", "max_theta", "final_theta", "stuck", "t_stop", "result",
+           "steps")
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepSpec:
+    """Everything about a sweep except the swept values (all plain, JSON-serialisable).
+
+    - `model`: "mode", "galerkin", "field" or "rod3d" (the full 3D rod, [`jaxrod.rod3d.Rod3D`][],
+      under the dead load F⁰_m* + ΔF with friction at the contact point; `n` segments, default
+      60; dt 0.5 of its explicit limit; `threshold` on max|θ| as for the other models).
+    - `perturbation`: "sine", "random-velocity", "random-position" or "random-shape"
+      (amplitude units as in [`jaxrod.scene.make_perturbation`][]; "random-position", a
+      timed force pulse, is not available with "rod3d").
+    - `mu`: friction coefficient (μ_s = μ_d) unless swept; `dF` [N], `amplitude` defaults.
+    - `mode`: sine / single mode number; `n`: nodes, modes or 3D segments (`None`: the
+      default for the largest load of the sweep); `dt` [s] (`None`: 0.4 of the step limit of
+      the stiffest member, 0.5 for "rod3d"); `t1` [s] horizon; `threshold` [rad] buckling
+      amplitude.
+    - `rod`: overrides of the reference rod's fields (e.g. `{"R": 0.01}`).
+    """
+
+    model: str = "field"
+    perturbation: str = "sine"
+    mu: float = 0.3
+    dF: float = 5.0
+    amplitude: float = 0.01
+    mode: int = 6
+    n: int | None = None
+    dt: float | None = None
+    t1: float = 2.0
+    threshold: float = 0.5
+    duration: float = 1e-3
+    rod: Mapping[str, float] = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.model not in MODELS:
+            raise ValueError(f"SweepSpec.model = {self.model!r} is invalid: expected one of {MODELS}.")
+        if self.model == "rod3d" and self.perturbation == "random-position":
+            raise ValueError("SweepSpec.perturbation = 'random-position' is not available with model 'rod3d': "
+                             "expected 'sine', 'random-velocity' or 'random-shape'.")
+        if self.model == "rod3d" and self.n is not None and not (isinstance(self.n, int) and self.n >= 4):
+            raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model 'rod3d': expected an int >= 4 segments.")
+        if self.perturbation not in PERTURBATIONS:
+            raise ValueError(
+                f"SweepSpec.perturbation = {self.perturbation!r} is invalid: expected one of "
+                f"{PERTURBATIONS}."
+            )
+        if not (isinstance(self.t1, (int, float)) and self.t1 > 0):
+            raise ValueError(f"SweepSpec.t1 = {self.t1!r} is invalid: expected > 0 s.")
+        bad = set(self.rod) - set(ROD_FIELDS)
+        if bad:
+            raise ValueError(f"SweepSpec.rod has unknown field(s) {sorted(bad)}; valid: {ROD_FIELDS}.")
+
+    def to_json(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["rod"] = dict(self.rod)
+        return d
+
