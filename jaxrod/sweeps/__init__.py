@@ -4,10 +4,12 @@ The package: `spec` (what a sweep is), `member` (one member on the engine), `run
 `result` (`SweepResult`), `store` (the sweep's folder).
 
 `sweep(spec, inputs)` runs one perturbed rod per member of a batch of parameter points and
-returns a [`jaxrod.SweepResult`][] of per-member arrays. Inside a chunk the members are vmapped;
-each chunk's batch axis is sharded over every local device (`jax.sharding.NamedSharding` over a
-one-axis `Mesh`); every chunk has the same shape (the last one is padded), so the sweep compiles
-once. With a `path`, every finished chunk is written atomically and a re-run skips it.
+returns a [`jaxrod.SweepResult`][] of per-member arrays. A chunk's members are dealt to the
+local devices in turn (`shard_map` over a one-axis `Mesh`); each device runs its share in
+16 lanes with continuous batching ([`jaxrod.batching.run_pool`][]): a lane whose member has
+stopped takes the next one inside the compiled loop. Every chunk has the same shape (the last
+one is padded with inactive members), so the sweep compiles once. With a `path`, every finished
+chunk is written atomically and a re-run skips it.
 
 **Multi-host use.** Start every process with `jax.distributed.initialize()` and give each one a
 disjoint member range (`members=range(start, stop)`, e.g. split by `jax.process_index()`) and
