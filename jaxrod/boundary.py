@@ -311,7 +311,7 @@ def critical_velocity(
     if model == "mode":
         def g2(v0, p):
             r = rod_of(p)
-            F = theory.frictionless_load(r, theory.critical_mode(r)) + p["dF"]
+            F = theory.reference_load(r) + p["dF"]
             m = SingleMode.from_rod(r, mode, F=F)
             return single_mode_indicator(v0 / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
     else:
@@ -366,7 +366,7 @@ def critical_load(
     if model == "mode":
         def g2(dF, p):
             r = rod_of(p)
-            F = theory.frictionless_load(r, theory.critical_mode(r)) + dF
+            F = theory.reference_load(r) + dF
             m = SingleMode.from_rod(r, mode, F=F)
             return single_mode_indicator(p["amplitude"] / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
     else:

@@ -1,6 +1,6 @@
 """Reproduce the reference paper's experiments: E2–E5 with the reduced models, E1 and the
 full-model part of E6 with the 3D rod ([`jaxrod.rod3d`][]), and the post-buckling experiment
-(`helix`: the frictionless helix against PHYSICS.md §6, a loading–unloading cycle with friction).
+(`helix`: the frictionless helix against docs/physics.md §6, a loading–unloading cycle with friction).
 
 `jaxrod reproduce {e1,e2,e3,e4,e5,e6,helix,all} [--out DIR] [--quick]` writes, per experiment, PNG
 figures laid out like a paper's panels and CSV data under `DIR/eN/`, and merges every fitted

@@ -126,7 +126,7 @@ class Scene(eqx.Module):
     @property
     def F(self) -> Float[Array, ""]:
         """The axial load [N]."""
-        return theory.frictionless_load(self.rod, theory.critical_mode(self.rod)) + self.dF
+        return theory.reference_load(self.rod) + self.dF
 
     def model(self):
         if self.kind == "mode":

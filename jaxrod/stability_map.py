@@ -62,7 +62,7 @@ def theory_boundary(rod: RodChannel, dF: np.ndarray, mode: int = 6) -> np.ndarra
     """Single-mode theory (P6): v_cr = R f/√|k_m| [m/s] at F = F⁰_m* + ΔF."""
     import jax.numpy as jnp
 
-    F0 = theory.frictionless_load(rod, theory.critical_mode(rod))
+    F0 = theory.reference_load(rod)
     k = theory.stiffness(rod, mode, F0 + jnp.asarray(dF))
     return np.asarray(rod.R * theory.velocity_intercept(k, theory.friction_amplitude(rod)))
 

@@ -1,4 +1,4 @@
-r"""Analytic theory of the frictionally confined rod (PHYSICS.md §2–4).
+r"""Analytic theory of the frictionally confined rod (docs/physics.md §2–4).
 
 Pure `jax.numpy` functions: every one is safe under `jit`, `vmap` and `grad`. Amplitudes are
 deflection angles θ in radians (lateral displacement R·θ, lateral velocity R·θ̇) unless
@@ -23,6 +23,7 @@ from jaxtyping import Array, ArrayLike, Bool, Float, Int
 from .params import RodChannel
 
 __all__ = [
+    "reference_load",
     "wavenumber",
     "stiffness",
     "friction_amplitude",
@@ -110,6 +111,12 @@ def critical_mode(rod: RodChannel, planar: bool = False) -> Int[Array, "..."]:
     m = jnp.where(frictionless_load(rod, lo) <= frictionless_load(rod, hi), lo, hi)
     return m.astype(int)
 
+
+
+def reference_load(rod: RodChannel) -> Float[Array, ""]:
+    """F⁰_m* [N]: the frictionless load of the rod's critical mode (P5; 1.308 N, mode 6, for the
+    reference rod). Every ΔF in jaxrod is measured from it."""
+    return frictionless_load(rod, critical_mode(rod))
 
 def velocity_intercept(k: ArrayLike, f: ArrayLike) -> Float[Array, "..."]:
     """Ȧ_cr = f/√|k| (P6): the largest pure velocity perturbation that leaves a loaded

@@ -112,7 +112,7 @@ def worst_case_velocity(
     u = best * best_xi / field_norm(best_xi, norm)
     spectrum = np.asarray(modal_spectrum(u, min(n, 40)))
     # single-mode prediction: P6 intercept of every unstable mode, as a field norm
-    F = theory.frictionless_load(rod, theory.critical_mode(rod)) + dF
+    F = theory.reference_load(rod) + dF
     m = jnp.arange(1, n + 1)
     k = theory.stiffness(rod, m, F)
     v_cr = rod.R * theory.velocity_intercept(k, theory.friction_amplitude(rod))

@@ -24,7 +24,7 @@ NOTEBOOKS = {
     "01_quick_start": [
         ("md", "# 01 Quick start\nTheory numbers, one simulation and one small stability map for the reference rod."),
         ("code", HEAD),
-        ("md", "## Theory (PHYSICS.md P3-P7)"),
+        ("md", "## Theory (docs/physics.md P3-P7)"),
         ("code", '''m = int(jr.theory.critical_mode(rod))
 print("F0cr (continuous) =", float(jr.theory.critical_load_continuous(rod)), "N; critical mode", m,
       "with F0_m =", float(jr.theory.frictionless_load(rod, m)), "N")

@@ -23,7 +23,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"jaxrod {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    t = sub.add_parser("theory", help="analytic loads and stable-zone intercepts (PHYSICS.md P3-P7)")
+    t = sub.add_parser("theory", help="analytic loads and stable-zone intercepts (docs/physics.md P3-P7)")
     t.add_argument("--mu", type=_finite_float, default=0.3, help="friction coefficient (default 0.3)")
     t.add_argument("--dF", type=_finite_float, default=None, help="load above F0_m [N]")
     t.add_argument("--mode", type=int, default=None, help="mode m (default: the critical mode)")

@@ -1,5 +1,5 @@
 """Post-buckling of the 3D rod: slow displacement-controlled loading past buckling into a helix
-(frictionless), compared with the helical-buckling results of PHYSICS.md §6, and a loading–
+(frictionless), compared with the helical-buckling results of docs/physics.md §6, and a loading–
 unloading cycle with friction and its hysteresis. `jaxrod reproduce helix` calls
 [`post_buckling`][].
 
@@ -17,7 +17,7 @@ the pinned ends where the rod must leave the wall to reach the bottom):
 - a node is *on the far side* when |θ| > π/2 (above the channel's axis height); the rod has
   *gone over the top* when some interior node has |θ| > π.
 
-Theory (PHYSICS.md §6): helical buckling starts between 2√2·√(EIw/R) (Chen, Lin & Cheatham)
+Theory (docs/physics.md §6): helical buckling starts between 2√2·√(EIw/R) (Chen, Lin & Cheatham)
 and 4√2·√(EIw/R) (Mitchell); pitch p = π√(8EI/F) (Lubinski); contact force R F²/(4EI) + w
 (Mitchell; + w is its value at the bottom of a turn, where gravity adds fully).
 """

@@ -1,4 +1,4 @@
-"""E2: phase portraits of the single-mode oscillator for the six cases of PHYSICS.md §4."""
+"""E2: phase portraits of the single-mode oscillator for the six cases of docs/physics.md §4."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ __all__ = ["Exact"]
 
 
 class Exact(AbstractIntegrator):
-    """The closed-form phase-by-phase solution of [`jaxrod.SingleMode`][] (PHYSICS.md §4):
+    """The closed-form phase-by-phase solution of [`jaxrod.SingleMode`][] (docs/physics.md §4):
     the ground truth for every accuracy test. Exact up to rounding; only for `SingleMode`.
 
     **Arguments:** `max_phases` (static): cap on slip phases per save time.

@@ -88,7 +88,7 @@ class FieldModel(AbstractModel):
         if (F is None) == (dF is None):
             raise ValueError("FieldModel.from_rod needs exactly one of F and dF.")
         if dF is not None:
-            F = theory.frictionless_load(rod, theory.critical_mode(rod)) + jnp.asarray(dF)
+            F = theory.reference_load(rod) + jnp.asarray(dF)
         return cls(rod, as_load(F), n_nodes, operator, threshold)
 
     # -- geometry and spectrum ---------------------------------------------------------------

@@ -84,7 +84,7 @@ class GalerkinModel(AbstractModel):
         if (F is None) == (dF is None):
             raise ValueError("GalerkinModel.from_rod needs exactly one of F and dF.")
         if dF is not None:
-            F = theory.frictionless_load(rod, theory.critical_mode(rod)) + jnp.asarray(dF)
+            F = theory.reference_load(rod) + jnp.asarray(dF)
         return cls(rod, as_load(F), n_modes, n_quad, threshold)
 
     def _phi(self):

@@ -193,7 +193,7 @@ def exact_solution(
 ) -> tuple[Float[Array, ""], Float[Array, ""], Bool[Array, ""], Int[Array, ""], Int[Array, ""]]:
     """The exact state at time `t` of `Ä + kA + f sgn(Ȧ) = 0` from (A₀, Ȧ₀) at t = 0.
 
-    Phase by phase (PHYSICS.md §4): each slip phase is solved in closed form until Ȧ = 0;
+    Phase by phase (docs/physics.md §4): each slip phase is solved in closed form until Ȧ = 0;
     there the mode sticks for good if |kA| ≤ `f_s` (the load is constant, so nothing can
     release it), and otherwise slips the other way against `f_d`. Jittable and vmappable
     (vmap over `t` for a trajectory); forward-mode differentiable.

@@ -160,7 +160,7 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
         raise ValueError("no member of the sweep has valid rod parameters.")
     n = spec.n
     if spec.model == "field" and n is None:
-        n = max(default_nodes(r, theory.frictionless_load(r, theory.critical_mode(r)) + dF_max) for r in rods)
+        n = max(default_nodes(r, theory.reference_load(r) + dF_max) for r in rods)
     if spec.model == "galerkin" and n is None:
         n = 32
     if spec.model == "rod3d":
@@ -180,7 +180,7 @@ def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
     n = spec.n or DEFAULT_SEGMENTS
     limits = []
     for r in rods:
-        F = float(theory.frictionless_load(r, theory.critical_mode(r))) + dF_max
+        F = float(theory.reference_load(r)) + dF_max
         limits.append(step_limit(Rod3D(r, n, control="load", end_load=F)))
     limit = min(limits)
     if spec.dt is not None and not (0 < spec.dt < limit):
