@@ -113,7 +113,7 @@ def e4(out, quick, progress):
     mus = s["mus"]
     R = s["realizations"]
     rod = RodChannel.reference()
-    F0 = float(theory.frictionless_load(rod, 6))
+    F0 = float(theory.reference_load(rod))
     F0cr = float(theory.critical_load_continuous(rod))
     cases = [
         ("sine 7.5 mm/s", "sine", 7.5e-3, 1, 2.0),
@@ -121,7 +121,7 @@ def e4(out, quick, progress):
         ("random velocity ±15 mm/s", "random-velocity", 15e-3, R, None),
         ("random position (forces ±2 N/m for 1 ms)", "random-position", 2.0, R, 1.0),
     ]
-    n_used = s["n"] or default_nodes(rod, float(theory.frictionless_load(rod, 6)) + s["max_dF"])
+    n_used = s["n"] or default_nodes(rod, float(theory.reference_load(rod)) + s["max_dF"])
     rows, res = [], {"model": "field", "n": n_used, "mu": mus.tolist(),
                      "dF_measured_from": f"F0_6 = {F0:.4f} N (F0cr continuous = {F0cr:.4f} N)"}
     fig, ax = subplots(figsize=(7, 5))

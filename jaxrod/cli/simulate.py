@@ -94,7 +94,7 @@ def _simulate_rod3d(args, rod) -> int:
     n = 60 if args.n is None else args.n
     if n < 4:
         _fail(f"argument --n: {n!r} is invalid: the 3D rod needs >= 4 segments.")
-    F = float(theory.frictionless_load(rod, 6)) + args.dF if args.control != "displacement" else 0.0
+    F = float(theory.reference_load(rod)) + args.dF if args.control != "displacement" else 0.0
     model = Rod3D(rod, n, control=args.control, speed=args.speed, end_load=F if args.control == "load" else 0.0)
     q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
     n_save = min(args.n_save, 1001)

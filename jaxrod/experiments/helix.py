@@ -50,7 +50,7 @@ def helix_theory(rod: RodChannel) -> dict:
     """The §6 numbers for `rod`: the helical onset band [N] and the pitch and contact-force laws."""
     c = math.sqrt(float(rod.EI) * float(rod.w) / float(rod.R))
     return dict(onset_chen=2.0 * math.sqrt(2.0) * c, onset_mitchell=4.0 * math.sqrt(2.0) * c,
-                sinusoidal_onset=float(theory.frictionless_load(rod, 6)))
+                sinusoidal_onset=float(theory.reference_load(rod)))
 
 
 def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset: float = 0.5e-3,

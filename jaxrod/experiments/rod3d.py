@@ -142,7 +142,7 @@ def e6_full(out, quick=False, progress=True):
     S = SIZES[quick]
     n = S["n"]
     rod = RodChannel.reference(0.3)
-    F0 = float(theory.frictionless_load(rod, 6))
+    F0 = float(theory.reference_load(rod))
     F0cr = float(theory.critical_load_continuous(rod))
     model = Rod3D(rod, n)
     q0, v0 = model.initial_state(F0 + 5.0, lateral_velocity=sine_velocity(model, 35e-3))
@@ -222,7 +222,7 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
     from ..boundary import critical_velocity
 
     rod = RodChannel.reference(mu)
-    F0 = float(theory.frictionless_load(rod, 6))
+    F0 = float(theory.reference_load(rod))
     out = []
     for dF in dFs:
         t0 = time.perf_counter()
@@ -281,7 +281,7 @@ def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps
     as mean ≈ max) and `all_stuck` (every interior node held by static friction at t1).
     """
     rod = RodChannel.reference(mu)
-    F = float(theory.frictionless_load(rod, 6)) + dF
+    F = float(theory.reference_load(rod)) + dF
     k = mode * np.pi / float(rod.L)
     EI, w, R = float(rod.EI), float(rod.w), float(rod.R)
     margin = abs(EI * k**4 - F * k**2 + w / R) * amplitude / (mu * w / R)
