@@ -23,6 +23,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from ._numerics import safe_norm
+
 __all__ = ["AbstractFriction", "Coulomb", "Tanh", "coulomb_prox"]
 
 
@@ -65,6 +67,13 @@ class AbstractFriction(eqx.Module):
     def acceleration(self, v, f_s, f_d):
         """Friction acceleration (opposing `v`) as a function of velocity, for ODE solvers."""
 
+    @abc.abstractmethod
+    def impulse_2d(self, u, W, bound_stick, bound_slip):
+        """The vector law at contact points (the 3D rod): per point, the 2D impulse `p` [N·s]
+        for the tangential slip velocities `u` (n, 2) [m/s] of points with inverse mass `W`
+        (n, 2, 2), under the impulse bounds `bound_stick` (to hold) and `bound_slip` (when
+        sliding) [N·s], (n,). Returns `(p, sticks)`: `sticks` marks the points held at rest."""
+
 
 class Coulomb(AbstractFriction):
     """The exact set-valued Coulomb law with static (`f_s`) and dynamic (`f_d`) bounds.
@@ -79,6 +88,36 @@ class Coulomb(AbstractFriction):
 
     def acceleration(self, v, f_s, f_d):
         return f_d * jnp.sign(v)
+
+    def impulse_2d(self, u, W, bound_stick, bound_slip):
+        """The exact proximal step of the vector law: stick, p = −W⁻¹u, while |W⁻¹u| ≤
+        `bound_stick`; otherwise the impulse of norm `bound_slip` that maximises dissipation,
+        p = −(W + λI)⁻¹u with |p| = `bound_slip` (a 1D secular equation in λ, solved by Newton)."""
+        det = W[:, 0, 0] * W[:, 1, 1] - W[:, 0, 1] * W[:, 1, 0]
+
+        def solve(A_det, A, b):
+            return jnp.stack([A[:, 1, 1] * b[:, 0] - A[:, 0, 1] * b[:, 1],
+                              -A[:, 1, 0] * b[:, 0] + A[:, 0, 0] * b[:, 1]], -1) / A_det[:, None]
+
+        p_stick = -solve(det, W, u)
+        sticks = safe_norm(p_stick) <= bound_stick
+        slips = ~sticks & (bound_slip > 0)
+        # slip: Newton on φ(λ) = 1/|p(λ)| − 1/c (concave, increasing), from a λ₀ left of the root
+        c = jnp.where(slips, bound_slip, 1.0)
+        trW = W[:, 0, 0] + W[:, 1, 1]
+        us = jnp.where(slips[:, None], u, jnp.array([[1.0, 0.0]], u.dtype) * 2.0 * trW[:, None])
+        lam = jnp.maximum(0.0, safe_norm(us) / c - trW)
+        eye = jnp.eye(2, dtype=u.dtype)
+        for _ in range(8):
+            A = W + lam[:, None, None] * eye[None]
+            Ad = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0]
+            p = -solve(Ad, A, us)
+            pn = safe_norm(p)
+            dphi = jnp.sum(p * solve(Ad, A, p), -1) / pn**3
+            lam = jnp.maximum(lam - (1.0 / pn - 1.0 / c) / dphi, 0.0)
+        A = W + lam[:, None, None] * eye[None]
+        p_slip = -solve(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0], A, us)
+        return jnp.where(sticks[:, None], p_stick, jnp.where(slips[:, None], p_slip, 0.0)), sticks
 
 
 class Tanh(AbstractFriction):
@@ -101,3 +140,11 @@ class Tanh(AbstractFriction):
 
     def acceleration(self, v, f_s, f_d):
         return f_d * jnp.tanh(v / self.eps)
+
+    def impulse_2d(self, u, W, bound_stick, bound_slip):
+        """The explicit smoothed impulse −`bound_slip`·tanh(|u|/ε)·u/|u| (never sticks)."""
+        x = safe_norm(u) / self.eps
+        small = x < 1e-4
+        xs = jnp.where(small, 1.0, x)
+        tanhc = jnp.where(small, 1.0 - x**2 / 3.0, jnp.tanh(xs) / xs)  # tanh(x)/x
+        return -(bound_slip * tanhc / self.eps)[:, None] * u, jnp.zeros(u.shape[:1], bool)

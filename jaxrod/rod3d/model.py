@@ -52,10 +52,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
-from ..friction import Coulomb, Tanh
 from ..models.base import AbstractModel
 from ..params import RodChannel, _concrete
-from .so3 import exp_so3, log_so3, safe_norm, skew
+from .._numerics import safe_norm
+from .so3 import exp_so3, log_so3, skew
 
 __all__ = ["Rod3D", "Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "step_limit", "sine_velocity"]
 
@@ -486,9 +486,6 @@ class Rod3D(AbstractModel):
         """The friction impulses of a (half) step `h` [s] under the law `friction`
         ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]), even nodes then odd nodes.
         Returns the new (v, w, stuck)."""
-        if not isinstance(friction, (Coulomb, Tanh)):
-            raise ValueError(f"friction = {friction!r} is invalid for the 3D rod: expected jaxrod.Coulomb() "
-                             "or jaxrod.Tanh(eps).")
         if not self.channel:  # no wall, no contact, no friction
             return v, w, stuck
         held, _ = self.held()
@@ -521,7 +518,8 @@ class Rod3D(AbstractModel):
                 u = u - jnp.einsum("iab,ib->ia", W, p_acc)  # without the node's own impulse
                 bound_s = mu_s * N * h
                 bound_d = mu_d * N * h
-                p, sticks = _prox(friction, u, W, jnp.where(stuck, bound_s, bound_d), bound_d, active)
+                p, sticks = friction.impulse_2d(u, W, jnp.where(stuck, bound_s, bound_d), bound_d)
+                p, sticks = jnp.where(active[:, None], p, 0.0), active & sticks
                 mine = (idx % 2 == colour)[:, None]
                 dp = jnp.where(mine, p - p_acc, 0.0)
                 p_acc = jnp.where(mine, p, p_acc)
@@ -646,48 +644,6 @@ class Rod3D(AbstractModel):
         """Compressive axial force of each segment, −EA σ₃ [N]."""
         sigma, _ = self.strains(x, Q)
         return -self.rod.EA * sigma[:, 2]
-
-
-def _prox(law, u, W, bound_stick, bound_slip, active):
-    """Per-node 2D friction impulse p for the slip velocities `u` (n1, 2) with inverse masses
-    `W` (n1, 2, 2). Coulomb: p = −W⁻¹u if |W⁻¹u| ≤ `bound_stick`, else the impulse of norm
-    `bound_slip` maximising dissipation: p = −(W + λI)⁻¹u with |p| = bound_slip. Tanh:
-    explicit smoothed impulse. Inactive nodes get p = 0. Returns (p, sticks)."""
-    if isinstance(law, Tanh):
-        un = safe_norm(u)
-        x = un / law.eps
-        small = x < 1e-4
-        xs = jnp.where(small, 1.0, x)
-        tanhc = jnp.where(small, 1.0 - x**2 / 3.0, jnp.tanh(xs) / xs)  # tanh(x)/x
-        p = -(bound_slip * tanhc / law.eps)[:, None] * u
-        return jnp.where(active[:, None], p, 0.0), jnp.zeros_like(active)
-    det = W[:, 0, 0] * W[:, 1, 1] - W[:, 0, 1] * W[:, 1, 0]
-
-    def solve(A_det, A, b):
-        return jnp.stack([A[:, 1, 1] * b[:, 0] - A[:, 0, 1] * b[:, 1], -A[:, 1, 0] * b[:, 0] + A[:, 0, 0] * b[:, 1]], -1) / A_det[:, None]
-
-    p_stick = -solve(det, W, u)
-    need = safe_norm(p_stick)
-    sticks = active & (need <= bound_stick)
-    slips = active & ~sticks & (bound_slip > 0)
-    # slip: Newton on φ(λ) = 1/|p(λ)| − 1/c (concave, increasing), from a λ₀ left of the root
-    c = jnp.where(slips, bound_slip, 1.0)
-    us = jnp.where(slips[:, None], u, jnp.array([[1.0, 0.0]], u.dtype) * 2.0 * (W[:, 0, 0] + W[:, 1, 1])[:, None])
-    trW = W[:, 0, 0] + W[:, 1, 1]
-    lam = jnp.maximum(0.0, safe_norm(us) / c - trW)
-    eye = jnp.eye(2, dtype=u.dtype)
-    for _ in range(8):
-        A = W + lam[:, None, None] * eye[None]
-        Ad = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0]
-        p = -solve(Ad, A, us)
-        pn = safe_norm(p)
-        Ainv_p = solve(Ad, A, p)
-        dphi = jnp.sum(p * Ainv_p, -1) / pn**3
-        lam = jnp.maximum(lam - (1.0 / pn - 1.0 / c) / dphi, 0.0)
-    A = W + lam[:, None, None] * eye[None]
-    p_slip = -solve(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0], A, us)
-    p = jnp.where(sticks[:, None], p_stick, jnp.where(slips[:, None], p_slip, 0.0))
-    return p, sticks
 
 
 def sine_velocity(model: Rod3D, v0, mode: int = 6):

@@ -6,14 +6,9 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
+from .._numerics import safe_norm as safe_norm
+
 __all__ = ["skew", "vee", "exp_so3", "log_so3", "safe_norm"]
-
-
-def safe_norm(v: Float[Array, "... 3"], axis: int = -1) -> Float[Array, "..."]:
-    """|v| with a zero (not NaN) gradient at v = 0."""
-    sq = jnp.sum(v * v, axis=axis)
-    pos = sq > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, sq, 1.0)), 0.0)
 
 
 def skew(a: Float[Array, "... 3"]) -> Float[Array, "... 3 3"]:

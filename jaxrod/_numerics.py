@@ -1,0 +1,15 @@
+"""Numerical helpers shared across layers."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+__all__ = ["safe_norm"]
+
+
+def safe_norm(v: Float[Array, "... 3"], axis: int = -1) -> Float[Array, "..."]:
+    """|v| with a zero (not NaN) gradient at v = 0."""
+    sq = jnp.sum(v * v, axis=axis)
+    pos = sq > 0
+    return jnp.where(pos, jnp.sqrt(jnp.where(pos, sq, 1.0)), 0.0)
