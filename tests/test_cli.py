@@ -174,3 +174,21 @@ def test_version(capsys):
         main(["--version"])
     assert exc.value.code == 0
     assert capsys.readouterr().out.strip() == f"jaxrod {jaxrod.__version__}"
+
+
+@pytest.mark.parametrize("argv,option", [
+    (["map", "--out", "/dev/null/x", "--dF", "1:2:2", "--v0", "0.01:0.1:2", "--quiet"], "--out"),
+    (["figure", "phase", "--out", "/proc/jaxrod-test"], "--out"),
+    (["simulate", "--plot", "/dev/null/a.png"], "--plot"),
+    (["map", "--v0", "0:1:5"], "--v0"),
+])
+def test_unwritable_output_and_bad_values_end_in_one_line(argv, option, capsys):
+    """Before any work: one line on stderr naming the option, exit code 2, no traceback."""
+    from jaxrod.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and option in err and "Traceback" not in err
+    assert "np.float64" not in err

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import _Parser, _fail, _finite_float, _add_rod_options, _positive_int, _range_spec, _use_all_cpu_cores
+from ._common import _Parser, _check_writable, _fail, _finite_float, _add_rod_options, _positive_int, _range_spec, _use_all_cpu_cores
 from .theory import _cmd_theory
 from .simulate import _cmd_simulate
 from .map import _cmd_map
@@ -140,5 +140,12 @@ def main(argv: list[str] | None = None) -> int:
         _resolve_auto_model(args)
     if args.command in ("map", "boundary", "critical-load", "reproduce"):
         _use_all_cpu_cores()
-    return args.func(args)
+    if getattr(args, "out", None):
+        _check_writable("--out", args.out)
+    if getattr(args, "plot", None):
+        _check_writable("--plot", args.plot, folder=False)
+    try:
+        return args.func(args)
+    except OSError as err:  # a file system error mid-run: one line, never a traceback
+        _fail(f"cannot write {err.filename or 'the output'}: {err.strerror or err}.")
 

@@ -70,6 +70,21 @@ def _json_number(x):
     return x if math.isfinite(x) else None
 
 
+def _check_writable(option: str, path: str, folder: bool = True) -> None:
+    """Fail with one line, before any work, if `path` (a folder to create, or a file's folder)
+    cannot be written."""
+    import os
+    import tempfile
+
+    target = path if folder else (os.path.dirname(path) or ".")
+    try:
+        os.makedirs(target, exist_ok=True)
+        with tempfile.TemporaryFile(dir=target):
+            pass
+    except OSError as err:
+        _fail(f"argument {option}: cannot write to {path!r}: {err.strerror or err}.")
+
+
 def _positive_int(text: str) -> int:
     try:
         x = int(text)

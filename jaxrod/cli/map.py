@@ -18,7 +18,7 @@ def _cmd_map(args) -> int:
     if args.mu is not None and args.mu < 0:
         _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
     if np.any(args.v0 <= 0):
-        _fail(f"argument --v0: velocities must be > 0 m/s, got {args.v0.min()!r}.")
+        _fail(f"argument --v0: velocities must be > 0 m/s, got {float(args.v0.min())!r}.")
     mus = (0.3, 0.0) if args.mu is None else (args.mu,)
     print(f"stability map: {args.model} model, mu = {', '.join(f'{m:g}' for m in mus)}, "
           f"{len(args.dF)} x {len(args.v0)} grid, {jax.local_device_count()} device(s) "
