@@ -1,0 +1,91 @@
+"""E5: the dominant buckling mode against μ for random perturbations."""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from .. import theory
+from ..output import subplots, write_csv
+from ..params import RodChannel
+from ._settings import _settings
+
+__all__ = ['e5']
+
+
+def e5(out, quick, progress):
+    import jax
+    import jax.numpy as jnp
+
+    from ..boundary import critical_load_curve
+    from ..scene import Scene, default_nodes, make_perturbation
+
+    s = _settings(quick)
+    mus = s["mus"]
+    R = s["realizations"]
+    rod0 = RodChannel.reference()
+    n = s["n"] or default_nodes(rod0, s["max_dF"])
+    fig, axes = subplots(1, 2, figsize=(12, 4.8))
+    res = {"model": "field", "n": n}
+    rows = []
+    for kind, amp in (("random-velocity", 15e-3), ("random-position", 2.0)):
+        rr, _ = critical_load_curve(mus, amp, perturbation=kind, realizations=R, seed=5, n=n, t1=s["t1"],
+                                    bracket=(1e-3, s["max_dF"]))
+        dFs = np.asarray(rr.root) * 1.05  # just past the boundary
+        ok = np.asarray(rr.result) == 0
+        probe = Scene(rod0, float(np.nanmax(dFs)), kind="field", n=n)
+        dt = probe.step()
+        root_key = jax.random.key(5)
+
+        def mode_at(mu, dF, i, r):
+            rod = RodChannel.reference(mu=mu)
+            key = jax.random.fold_in(root_key, i * R + r)
+            sc = Scene(rod, dF, make_perturbation(kind, amp, 6, key), "field", n, 6, dt)
+            sol = sc.run(t1=2.0, n_save=201, save_state=False)
+            from ..modal import dominant_mode
+
+            return dominant_mode(sol.q_final), sol.buckled
+
+        run = jax.jit(jax.vmap(jax.vmap(mode_at, (None, 0, None, 0)), (0, 0, 0, None)))
+        modes, buckled = run(jnp.asarray(mus), jnp.asarray(dFs), jnp.arange(len(mus)), jnp.arange(R))
+        modes = np.where(ok & np.asarray(buckled), np.asarray(modes), np.nan).astype(float)
+        mean, std = np.nanmean(modes, axis=1), np.nanstd(modes, axis=1)
+        res[kind] = {"amplitude": amp, "mu": mus.tolist(), "dominant_mode_mean": mean.tolist(),
+                     "dominant_mode_std": std.tolist(), "dominant_mode_min": float(np.nanmin(modes)),
+                     "dF_evaluated": np.nanmean(np.where(ok, dFs, np.nan), axis=1).tolist()}
+        axes[0].errorbar(mus, mean, yerr=std, fmt="o-", capsize=3, label=f"{kind} (field, ΔF = 1.05 ΔF*)")
+        for i, m in enumerate(mus):
+            rows.append(dict(perturbation=kind, mu=m, mode_mean=mean[i], mode_std=std[i]))
+    # theory: the mode whose zone is crossed first for an equal modal velocity amplitude
+    n_modes = n
+    a_modal = 15e-3 * math.sqrt(2.0 / (3 * (n + 1))) / float(rod0.R)  # RMS modal amplitude of U(-a, a) per node
+    m_theory = [int(theory.min_critical_load(rod0.with_friction(m), n_modes, a_modal)[1]) for m in mus]
+    res["theory_first_mode_equal_modal_velocity"] = {"mu": mus.tolist(), "mode": m_theory,
+                                                     "modal_velocity_rad_s": a_modal}
+    axes[0].plot(mus, m_theory, "k--", label="P7: first zone crossed, equal modal Ȧ₀")
+    axes[0].axhline(6, color="gray", lw=0.8)
+    axes[0].set_xscale("log")
+    axes[0].set_xlabel("μ")
+    axes[0].set_ylabel("dominant buckling mode")
+    axes[0].set_title("E5: buckling mode against friction", fontsize=10)
+    axes[0].legend(fontsize=7)
+    # P6 intercepts against load for modes 2..10
+    F = np.linspace(1.0, 20.0, 300)
+    rod = rod0
+    f = float(theory.friction_amplitude(rod))
+    for m in (2, 4, 6, 8, 10):
+        k = np.asarray(theory.stiffness(rod, m, F))
+        v = np.where(k < 0, f / np.sqrt(np.abs(k)), np.nan)
+        axes[1].plot(F, float(rod.R) * 1e3 * v, label=f"mode {m} (F⁰ = {float(theory.frictionless_load(rod, m)):.2f} N)")
+    axes[1].set_yscale("log")
+    axes[1].set_xlabel("F [N]")
+    axes[1].set_ylabel("R·Ȧ_m,cr [mm/s] (P6, μ = 0.3)")
+    axes[1].set_title("velocity intercepts of modes 2–10", fontsize=10)
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "e5_modes.png"), dpi=130)
+    write_csv(os.path.join(out, "e5_modes.csv"), rows)
+    return res
+

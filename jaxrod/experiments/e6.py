@@ -1,0 +1,80 @@
+"""E6 with the reduced models (modal spectra before and after buckling) and the 3D rod's
+full-model part."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..output import subplots, write_csv
+from ..params import RodChannel
+from ._settings import _settings
+
+__all__ = ['e6']
+
+
+def e6(out, quick, progress):
+    import jax
+
+    from ..modal import modal_spectrum
+    from ..scene import Scene, make_perturbation
+
+    s = _settings(quick)
+    n = s["n"] or 128
+    fig, axes = subplots(1, 2, figsize=(12, 4.5))
+    res = {"model": "field", "n": n}
+    cases = [
+        ("sine mode 6, μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s", 0.3, 5.0, make_perturbation("sine", 35e-3, 6)),
+        ("random position, μ = 0.9, ΔF = 40 N", 0.9, 40.0,
+         make_perturbation("random-position", 2.0, 6, jax.random.key(6))),
+    ]
+    rows = []
+    for ax, (label, mu, dF, pert) in zip(axes, cases):
+        sc = Scene(RodChannel.reference(mu=mu), dF, pert, "field", n)
+        sol = sc.run(t1=0.5, n_save=501)
+        q = np.asarray(sol.q)
+        ts = np.asarray(sol.ts)
+        i_after = int(np.searchsorted(ts, float(sol.t_stop))) if bool(sol.buckled) else len(ts) - 1
+        i_after = min(i_after, len(ts) - 1)
+        nonzero = [i for i in range(len(ts)) if np.any(q[i] != 0)]
+        i_before = nonzero[0] if nonzero else 0
+        m = np.arange(1, min(n, 40) + 1)
+        p_before = np.asarray(modal_spectrum(q[i_before], len(m)))
+        p_after = np.asarray(modal_spectrum(q[i_after], len(m)))
+        ax.bar(m - 0.2, p_before, width=0.4, label=f"before (t = {ts[i_before] * 1e3:.1f} ms)")
+        ax.bar(m + 0.2, p_after, width=0.4, label=f"{'at buckling' if bool(sol.buckled) else 'end'} "
+                                                  f"(t = {ts[i_after] * 1e3:.1f} ms)")
+        ax.set_yscale("log")
+        ax.set_ylim(1e-6, 1.5)
+        ax.set_xlabel("mode m")
+        ax.set_ylabel("normalised modal power")
+        ax.set_title(label, fontsize=9)
+        ax.legend(fontsize=7)
+        res[label] = {"buckled": bool(sol.buckled), "t_buckle": float(sol.t_buckle),
+                      "dominant_mode_before": int(np.argmax(p_before)) + 1,
+                      "dominant_mode_after": int(np.argmax(p_after)) + 1,
+                      "dominant_power_after": float(np.max(p_after)),
+                      "energy_balance_error": float(sol.energy_balance_error())}
+        for mm, a, b in zip(m, p_before, p_after):
+            rows.append(dict(case=label, mode=int(mm), power_before=a, power_after=b))
+    from .rod3d import SIZES, crosscheck_critical_velocity, e6_full, rolling_check
+
+    res["full_model"] = e6_full(out, quick, progress)
+    S = SIZES[quick]
+    # friction at the contact point (the model) and at the centre line (sliding only, no
+    # rolling: the reduced models' assumption), to separate rolling from everything else
+    res["crosscheck_critical_velocity"] = crosscheck_critical_velocity(
+        S["dFs"], n=S["n_cross"], progress=progress)
+    res["crosscheck_critical_velocity_axis_friction"] = crosscheck_critical_velocity(
+        S["dFs"], n=S["n_cross"], progress=progress, friction_at="axis")
+    if S["dFs"]:
+        if progress:
+            print("  rolling check: a rod the field model calls stuck, friction at the surface and the axis", flush=True)
+        res["rolling_check"] = rolling_check(max(S["dFs"]), n=S["n_cross"])
+    fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "e6_spectra.png"), dpi=130)
+    write_csv(os.path.join(out, "e6_spectra.csv"), rows)
+    return res
+
