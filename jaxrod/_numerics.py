@@ -5,7 +5,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-__all__ = ["safe_norm"]
+__all__ = ["safe_norm", "float_leaf"]
 
 
 def safe_norm(v: Float[Array, "... 3"], axis: int = -1) -> Float[Array, "..."]:
@@ -13,3 +13,8 @@ def safe_norm(v: Float[Array, "... 3"], axis: int = -1) -> Float[Array, "..."]:
     sq = jnp.sum(v * v, axis=axis)
     pos = sq > 0
     return jnp.where(pos, jnp.sqrt(jnp.where(pos, sq, 1.0)), 0.0)
+
+
+def float_leaf(x, dtype=None):
+    """`x` as an array of `dtype` (default: the default float dtype): a model's physical number."""
+    return jnp.asarray(x, dtype=jnp.result_type(float) if dtype is None else dtype)

@@ -1,8 +1,8 @@
 """The full model: a 3D discrete Cosserat rod in the channel (see `jaxrod.rod3d.model`)."""
 
 from .model import Rod3D as Rod3D
-from .model import Rod3DForces as Rod3DForces
-from .model import Rod3DPosition as Rod3DPosition
-from .model import Rod3DVelocity as Rod3DVelocity
+from .state import Rod3DForces as Rod3DForces
+from .state import Rod3DPosition as Rod3DPosition
+from .state import Rod3DVelocity as Rod3DVelocity
 from .model import step_limit as step_limit
 from .model import sine_velocity as sine_velocity

@@ -1,50 +1,16 @@
 r"""The full model: a 3D discrete Cosserat rod inside the channel, with wall contact and static
-and dynamic Coulomb friction.
+and dynamic Coulomb friction at the contact point.
 
-**Discretisation.** `n` straight segments between `n + 1` nodes. Node i has position
-xᵢ ∈ ℝ³ and velocity vᵢ; segment j has directors Qⱼ (rows d₁, d₂, d₃ in the lab frame,
-d₃ along the segment) and angular velocity ωⱼ in its own (material) frame, Q̇ = −[ω]×Q.
-Reference segment length l̂ = L/n; node i carries mass ρ·l̄ᵢ with l̄ᵢ its Voronoi length
-(l̂, or l̂/2 at the ends); segment j has rotary inertia ρ_v l̂ · diag(α I, α I, 2I).
-
-**Elastic energy** (a discrete Timoshenko–Cosserat rod, as in Gazzola et al. 2018, but
-written as one energy whose gradient gives forces and torques):
-
-- stretch and shear of segment j, with σⱼ = Qⱼ(x_{j+1} − xⱼ)/l̂ − e₃ (material frame):
-  U = ½ l̂ (κGA (σ₁² + σ₂²) + EA σ₃²), κ = 6(1 + ν)/(7 + 6ν) (circular section);
-- bend and twist at interior node i, with the curvature ψᵢ/l̂, ψᵢ = log(Qᵢ Q_{i−1}ᵀ) the
-  rotation vector between adjacent segments: U = ½ l̂ (EI (κ₁² + κ₂²) + GJ κ₃²);
-- gravity −g e_z on the node masses; an optional body force per length (for tests);
-- **wall contact**: the centre line may move on the cylinder of radius R (the clearance);
-  a node beyond it by δ = r − R > 0 (r its distance from the channel axis) is pushed back
-  by the Hertz-type force l̄ᵢ k δ^{3/2} (1 + ζ δ̇) along the inward radius (Hunt–Crossley
-  damping ζ; energy l̄ᵢ (2/5) k δ^{5/2}). The rod lifts off freely (no force for δ ≤ 0).
-
-Forces are −∂U/∂x and material torques −∂U/∂φ for the variation Q → (I − [φ]×)Q, both by
-one reverse-mode gradient. Rotations obey Euler's equations J ω̇ = τ − ω × Jω.
-
-**Friction** acts at the contact point on the rod's surface, x + (d/2) e_r (e_r the outward
-radius), so it both translates the node and spins the adjacent segments (half the torque to
-each): the rod can roll and twist. The slip velocity u ∈ ℝ² (axial, circumferential) is the
-contact point's tangential velocity. The sharp law is the exact proximal step of the
-vector Coulomb law with the point's 2×2 inverse mass W: stick (u → 0) while the impulse
-needed, |W⁻¹u|, is within μ_s N h; otherwise slip with the impulse of magnitude μ_d N h
-that maximises dissipation (a 1D secular equation solved by Newton). Even and odd nodes
-share no segment, so the step is exact on the even nodes and then on the odd ones
-(red–black); within one step a stuck even node can thus be nudged by its odd neighbours'
-impulses, which the next step corrects. The smooth law is μ_d N tanh(|u|/ε) along −u/|u|.
-
-**Rotary inertia scaling α.** A segment rotating against its shear spring has frequency
-4√(κG/ρ_v)/(d√α), which for a thin rod (d = 1.5 mm) is 5e6 rad/s at α = 1 and would set an
-explicit step of 4e-7 s, far below the axial wave's l̂/c. By default α is the smallest value
-≥ 1 that brings that frequency down to the axial wave's 2c/l̂ (α = 533 for 100 segments on
-the reference rod). It only scales the transverse rotary inertia, whose effect on bending
-is the Rayleigh correction ~ α(ωₘ d/4)²/2 (1.5e-3 for mode 6 at α = 533); the polar inertia,
-which governs rolling, is never scaled. Set `rotary_scale=1` for the unscaled rod.
+n straight segments between n + 1 nodes (positions, segment directors); stretch, shear, bend
+and twist energies whose reverse-mode gradient gives forces and torques; gravity; Hertz–Hunt–
+Crossley wall contact on the clearance circle (the rod may lift off and climb the wall); the
+vector Coulomb law at the contact point (it translates the node and spins its segments: the rod
+can roll), applied red–black as an exact proximal step; the transverse rotary inertia scaled by
+α so that an explicit step is not set by the shear–rotation frequency. Every equation, and the
+effect of α, is in docs/physics.md §7.
 """
 
 from __future__ import annotations
-
 
 import equinox as eqx
 import jax
@@ -54,48 +20,17 @@ from jaxtyping import Array, ArrayLike, Bool, Float
 
 from ..models.base import AbstractModel
 from ..params import RodChannel, _concrete
-from .._numerics import safe_norm
+from .._numerics import float_leaf, safe_norm
+from .contact import friction_pass
 from .so3 import exp_so3, log_so3, skew
+from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, straight_state
+from .stiffness import max_frequency
 
 __all__ = ["Rod3D", "Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "step_limit", "sine_velocity"]
 
 E3 = np.array([0.0, 0.0, 1.0])
 # Directors of a straight rod along x: d1 = y, d2 = z, d3 = x (right-handed).
 Q_STRAIGHT = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
-
-
-class Rod3DPosition(eqx.Module):
-    """The rod's coordinates `q`: node positions `x` (n+1, 3) [m] and segment directors `Q`
-    (n, 3, 3) (rows d₁, d₂, d₃ in the lab frame: lab → material)."""
-
-    x: Float[Array, "n1 3"]
-    Q: Float[Array, "n 3 3"]
-
-
-class Rod3DVelocity(eqx.Module):
-    """The rod's velocities `v`: node velocities `v` (n+1, 3) [m/s], segment angular
-    velocities `w` (n, 3) in the material frame [rad/s], and the friction law's memory `stuck`
-    (n+1,): whether each contact was held by static friction at the last impulse (it then
-    keeps the static coefficient)."""
-
-    v: Float[Array, "n1 3"]
-    w: Float[Array, "n 3"]
-    stuck: Bool[Array, " n1"]
-
-
-class Rod3DForces(eqx.Module):
-    """What a kick needs (the integrators' `a`): node forces `f` [N] (elastic, contact,
-    gravity, body, damping), material torques `tau` [N·m], wall normal forces `N` [N] and the
-    non-conservative (damping) part `fd` of the node forces [N]."""
-
-    f: Float[Array, "n1 3"]
-    tau: Float[Array, "n 3"]
-    N: Float[Array, " n1"]
-    fd: Float[Array, "n1 3"]
-
-
-def _leaf(x, dtype=None):
-    return jnp.asarray(x, dtype=jnp.result_type(float) if dtype is None else dtype)
 
 
 class Rod3D(AbstractModel):
@@ -184,21 +119,21 @@ class Rod3D(AbstractModel):
         self.ends = ends
         self.control = control
         self.gravity = bool(gravity)
-        self.speed = _leaf(speed)
-        self.end_load = _leaf(end_load)
+        self.speed = float_leaf(speed)
+        self.end_load = float_leaf(end_load)
         l0 = rod.L / n_segments
         if contact_stiffness is None:
             contact_stiffness = rod.w / (1e-3 * rod.R) ** 1.5
-        self.contact_stiffness = _leaf(contact_stiffness)
-        self.contact_damping = _leaf(contact_damping)
-        self.damping = _leaf(damping)
+        self.contact_stiffness = float_leaf(contact_stiffness)
+        self.contact_damping = float_leaf(contact_damping)
+        self.damping = float_leaf(damping)
         kappa = 6.0 * (1.0 + rod.nu) / (7.0 + 6.0 * rod.nu)
-        self.shear_coefficient = _leaf(kappa)
+        self.shear_coefficient = float_leaf(kappa)
         if rotary_scale is None:
             # 4√(κG/ρ_v)/(d√α) = 2c/l̂  ⇒  α = 4 κ (G/E) (l̂/d)²
             rotary_scale = jnp.maximum(1.0, 4.0 * kappa * (rod.G / rod.E) * (l0 / rod.d) ** 2)
-        self.rotary_scale = _leaf(rotary_scale)
-        self.body_force = _leaf(body_force)
+        self.rotary_scale = float_leaf(rotary_scale)
+        self.body_force = float_leaf(body_force)
         if not (isinstance(friction_sweeps, int) and friction_sweeps >= 1):
             raise ValueError(f"Rod3D.friction_sweeps = {friction_sweeps!r} is invalid: expected an int >= 1.")
         self.friction_sweeps = friction_sweeps
@@ -465,79 +400,10 @@ class Rod3D(AbstractModel):
         return fx + f_damp, tau, N, f_damp
 
     # -- friction ----------------------------------------------------------------------------
-    def _contact_frames(self, x):
-        _, e_r = self.penetration(x)
-        t1 = jnp.broadcast_to(jnp.array([1.0, 0.0, 0.0], x.dtype), e_r.shape)
-        t2 = jnp.stack([jnp.zeros_like(e_r[:, 0]), -e_r[:, 2], e_r[:, 1]], -1)  # x̂ × e_r
-        T = jnp.stack([t1, t2], -2)  # (n1, 2, 3)
-        rc = (0.5 * self.rod.d if self.friction_at == "surface" else 0.0) * e_r
-        return T, rc
-
-    def _weights(self):
-        """c_left[i] (segment i−1) and c_right[i] (segment i): each node's share of its
-        adjacent segments' spin and of the friction torque it applies to them."""
-        n = self.n
-        left = np.r_[0.0, np.ones(n)]
-        right = np.r_[np.ones(n), 0.0]
-        count = left + right
-        return jnp.asarray(left / count), jnp.asarray(right / count)
-
     def friction_step(self, friction, x, v, Q, w, N, stuck, h):
-        """The friction impulses of a (half) step `h` [s] under the law `friction`
-        ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]), even nodes then odd nodes.
-        Returns the new (v, w, stuck)."""
-        if not self.channel:  # no wall, no contact, no friction
-            return v, w, stuck
-        held, _ = self.held()
-        T, rc = self._contact_frames(x)
-        cl, cr = self._weights()
-        Jinv = 1.0 / self.inertia
-        m = self.mass
-        Jlab_inv = jnp.einsum("jba,b,jbc->jac", Q, Jinv, Q)  # Qᵀ diag(1/J) Q
-        pad = jnp.zeros((1, 3, 3), x.dtype)
-        Jl = jnp.concatenate([pad, Jlab_inv], 0)  # segment i−1 of node i
-        Jr = jnp.concatenate([Jlab_inv, pad], 0)  # segment i of node i
-        Rx = skew(rc)
-        K = (jnp.eye(3, dtype=x.dtype)[None] / m[:, None, None]
-             - (cl**2)[:, None, None] * Rx @ Jl @ Rx
-             - (cr**2)[:, None, None] * Rx @ Jr @ Rx)
-        W = jnp.einsum("iab,ibc,idc->iad", T, K, T)
-        mu_s, mu_d = self.rod.mu_s, self.rod.mu_d
-        in_contact = (N > 0) & ~jnp.any(held, -1)
-        idx = jnp.arange(self.n + 1)
-        p_acc = jnp.zeros((self.n + 1, 2), x.dtype)  # each node's impulse so far (this half step)
-
-        def sweep(carry):
-            v, w, stuck, p_acc = carry
-            for colour in (0, 1):
-                active = in_contact & (idx % 2 == colour)
-                wlab = jnp.einsum("jba,jb->ja", Q, w)
-                zero = jnp.zeros((1, 3), x.dtype)
-                wbar = cl[:, None] * jnp.concatenate([zero, wlab], 0) + cr[:, None] * jnp.concatenate([wlab, zero], 0)
-                u = jnp.einsum("iab,ib->ia", T, v + jnp.cross(wbar, rc))
-                u = u - jnp.einsum("iab,ib->ia", W, p_acc)  # without the node's own impulse
-                bound_s = mu_s * N * h
-                bound_d = mu_d * N * h
-                p, sticks = friction.impulse_2d(u, W, jnp.where(stuck, bound_s, bound_d), bound_d)
-                p, sticks = jnp.where(active[:, None], p, 0.0), active & sticks
-                mine = (idx % 2 == colour)[:, None]
-                dp = jnp.where(mine, p - p_acc, 0.0)
-                p_acc = jnp.where(mine, p, p_acc)
-                P = jnp.einsum("iab,ia->ib", T, dp)  # lab impulse on the node
-                v = v + P / m[:, None]
-                torque = jnp.cross(rc, P)  # lab torque impulse at the node
-                tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
-                w = w + Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg)
-                stuck = jnp.where(idx % 2 == colour, active & sticks, stuck)
-            return v, w, stuck, p_acc
-
-        carry = (v, w, stuck, p_acc)
-        if self.friction_sweeps == 1:
-            carry = sweep(carry)
-        else:  # a loop, not an unrolled copy per sweep (compile time)
-            carry = jax.lax.fori_loop(0, self.friction_sweeps, lambda _, c: sweep(c), carry)
-        v, w, stuck, _ = carry
-        return v, w, stuck
+        """The friction impulses of a (half) step `h` [s] under the law `friction`, even nodes
+        then odd nodes (`jaxrod.rod3d.contact.friction_pass`). Returns the new (v, w, stuck)."""
+        return friction_pass(self, friction, x, v, Q, w, N, stuck, h)
 
     # -- constraints and the step limit -------------------------------------------------------
     def constrain(self, v, w):
@@ -548,41 +414,9 @@ class Rod3D(AbstractModel):
 
     def max_frequency(self, q: Rod3DPosition | None = None, iters: int = 80) -> Float[Array, ""]:
         """ω_max [rad/s] of the linearised conservative dynamics at `q` (default: the straight
-        rod under its end load), by power iteration on M⁻¹H (Hessian-vector products by
-        forward-over-reverse AD). The explicit step limit is 2/ω_max."""
-        state = self.initial_state(self.end_load)[0] if q is None else q
-        held_n, held_s = self.held()
-        dtype = state.x.dtype
-        free_n = jnp.where(held_n, 0.0, 1.0).astype(dtype)
-        free_s = jnp.where(jnp.broadcast_to(held_s[:, None], (self.n, 3)), 0.0, 1.0).astype(dtype)
-        mass = self.mass[:, None] * jnp.ones((1, 3), dtype)
-        inert = self.inertia[None, :] * jnp.ones((self.n, 1), dtype)
-
-        def U(x, phi):
-            Qp = state.Q - jnp.einsum("jab,jbc->jac", skew(phi), state.Q)
-            return self.potential(x, Qp)
-
-        g = jax.grad(U, argnums=(0, 1))
-        phi0 = jnp.zeros((self.n, 3), state.x.dtype)
-
-        def hvp(dx, dphi):
-            return jax.jvp(lambda a, b: g(a, b), (state.x, phi0), (dx, dphi))[1]
-
-        key = jax.random.PRNGKey(0)
-        k1, k2 = jax.random.split(key)
-        dx = free_n * jax.random.normal(k1, state.x.shape, state.x.dtype) / jnp.sqrt(mass)
-        dp = free_s * jax.random.normal(k2, phi0.shape, state.x.dtype) / jnp.sqrt(inert)
-
-        def body(_, c):
-            dx, dp, lam = c
-            hx, hp = hvp(dx, dp)
-            ax, ap = free_n * hx / mass, free_s * hp / inert  # M⁻¹ H d on the free DOFs
-            nrm = jnp.sqrt(jnp.sum(mass * ax**2) + jnp.sum(inert * ap**2))
-            cur = jnp.sqrt(jnp.sum(mass * dx**2) + jnp.sum(inert * dp**2))
-            return ax / nrm, ap / nrm, nrm / cur
-
-        dx, dp, lam = jax.lax.fori_loop(0, iters, body, (dx, dp, jnp.zeros((), state.x.dtype)))
-        return jnp.sqrt(jnp.abs(lam))
+        rod under its end load), by power iteration (`jaxrod.rod3d.stiffness.max_frequency`).
+        The explicit step limit is 2/ω_max."""
+        return max_frequency(self, self.initial_state(self.end_load)[0] if q is None else q, iters)
 
     # -- states ------------------------------------------------------------------------------
     def static_sag(self):
@@ -599,41 +433,7 @@ class Rod3D(AbstractModel):
 
         **Returns:** `(q0, v0)`, a [`Rod3DPosition`][] and a [`Rod3DVelocity`][] (every
         contact at rest starts held by static friction)."""
-        n = self.n
-        F = _leaf(F)
-        dtype = F.dtype
-        l = self.l0 * (1.0 - F / self.rod.EA)
-        xs = jnp.arange(n + 1, dtype=dtype) * l
-        z = -(self.rod.R + self.static_sag()) if self.channel else 0.0 * self.rod.R
-        x = jnp.stack([xs, jnp.zeros_like(xs), jnp.zeros_like(xs) + z], -1)
-        if lateral_offset is not None:
-            # move along the wall: θ = offset/R on the circle of radius R + sag
-            if self.channel:
-                rr = self.rod.R + self.static_sag()
-                th = jnp.asarray(lateral_offset, dtype) / self.rod.R
-                x = x.at[:, 1].set(rr * jnp.sin(th)).at[:, 2].set(-rr * jnp.cos(th))
-            else:
-                x = x.at[:, 1].set(jnp.asarray(lateral_offset, dtype))
-        v = jnp.zeros_like(x)
-        if lateral_velocity is not None:
-            lv = jnp.asarray(lateral_velocity, dtype)
-            if self.channel:
-                _, e_r = self.penetration(x)
-                tang = jnp.stack([jnp.zeros_like(e_r[:, 0]), -e_r[:, 2], e_r[:, 1]], -1)
-                v = lv[:, None] * tang
-            else:
-                v = v.at[:, 1].set(lv)
-        # directors: d3 along each segment, d1 as close to y as possible (no twist)
-        e = x[1:] - x[:-1]
-        d3 = e / safe_norm(e)[:, None]
-        y = jnp.array([0.0, 1.0, 0.0], dtype)
-        d1 = y[None, :] - (d3 @ y)[:, None] * d3
-        d1 = d1 / safe_norm(d1)[:, None]
-        d2 = jnp.cross(d3, d1)
-        Q = jnp.stack([d1, d2, d3], -2)
-        v, w = self.constrain(v, jnp.zeros((n, 3), dtype))
-        at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
-        return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest)
+        return straight_state(self, F, lateral_velocity, lateral_offset)
 
     # -- observables -------------------------------------------------------------------------
     def theta(self, x) -> Float[Array, " n1"]:

@@ -1,0 +1,82 @@
+"""The 3D rod's state as pytrees: coordinates, velocities (with the friction law's memory) and
+the forces a kick needs."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Bool, Float
+
+from .._numerics import float_leaf, safe_norm
+
+
+__all__ = ["Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "straight_state"]
+
+
+class Rod3DPosition(eqx.Module):
+    """The rod's coordinates `q`: node positions `x` (n+1, 3) [m] and segment directors `Q`
+    (n, 3, 3) (rows d₁, d₂, d₃ in the lab frame: lab → material)."""
+
+    x: Float[Array, "n1 3"]
+    Q: Float[Array, "n 3 3"]
+
+
+class Rod3DVelocity(eqx.Module):
+    """The rod's velocities `v`: node velocities `v` (n+1, 3) [m/s], segment angular
+    velocities `w` (n, 3) in the material frame [rad/s], and the friction law's memory `stuck`
+    (n+1,): whether each contact was held by static friction at the last impulse (it then
+    keeps the static coefficient)."""
+
+    v: Float[Array, "n1 3"]
+    w: Float[Array, "n 3"]
+    stuck: Bool[Array, " n1"]
+
+
+class Rod3DForces(eqx.Module):
+    """What a kick needs (the integrators' `a`): node forces `f` [N] (elastic, contact,
+    gravity, body, damping), material torques `tau` [N·m], wall normal forces `N` [N] and the
+    non-conservative (damping) part `fd` of the node forces [N]."""
+
+    f: Float[Array, "n1 3"]
+    tau: Float[Array, "n 3"]
+    N: Float[Array, " n1"]
+    fd: Float[Array, "n1 3"]
+
+
+def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_offset=None):
+    """The straight initial state of `model` (see `Rod3D.initial_state`)."""
+    n = model.n
+    F = float_leaf(F)
+    dtype = F.dtype
+    l = model.l0 * (1.0 - F / model.rod.EA)
+    xs = jnp.arange(n + 1, dtype=dtype) * l
+    z = -(model.rod.R + model.static_sag()) if model.channel else 0.0 * model.rod.R
+    x = jnp.stack([xs, jnp.zeros_like(xs), jnp.zeros_like(xs) + z], -1)
+    if lateral_offset is not None:
+        # move along the wall: θ = offset/R on the circle of radius R + sag
+        if model.channel:
+            rr = model.rod.R + model.static_sag()
+            th = jnp.asarray(lateral_offset, dtype) / model.rod.R
+            x = x.at[:, 1].set(rr * jnp.sin(th)).at[:, 2].set(-rr * jnp.cos(th))
+        else:
+            x = x.at[:, 1].set(jnp.asarray(lateral_offset, dtype))
+    v = jnp.zeros_like(x)
+    if lateral_velocity is not None:
+        lv = jnp.asarray(lateral_velocity, dtype)
+        if model.channel:
+            _, e_r = model.penetration(x)
+            tang = jnp.stack([jnp.zeros_like(e_r[:, 0]), -e_r[:, 2], e_r[:, 1]], -1)
+            v = lv[:, None] * tang
+        else:
+            v = v.at[:, 1].set(lv)
+    # directors: d3 along each segment, d1 as close to y as possible (no twist)
+    e = x[1:] - x[:-1]
+    d3 = e / safe_norm(e)[:, None]
+    y = jnp.array([0.0, 1.0, 0.0], dtype)
+    d1 = y[None, :] - (d3 @ y)[:, None] * d3
+    d1 = d1 / safe_norm(d1)[:, None]
+    d2 = jnp.cross(d3, d1)
+    Q = jnp.stack([d1, d2, d3], -2)
+    v, w = model.constrain(v, jnp.zeros((n, 3), dtype))
+    at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
+    return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest)
