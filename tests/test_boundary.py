@@ -136,3 +136,32 @@ def test_worst_case_perturbation_beats_the_sine_field():
     assert r["indicator"](0.99 * r["norm_worst"]) <= 0  # 1 % below: does not
     assert abs(float(np.sum(r["spectrum"])) - 1) < 1e-9
     assert r["single_mode_prediction"] > 0 and r["single_mode_prediction_mode"] >= 6
+
+
+def test_static_friction_above_dynamic_is_kept_by_the_search():
+    """A rod with μ_s = 0.6 > μ_d = 0.3 starting from rest with a random shape (field model, 24
+    nodes): the search used to rebuild it with μ_s = μ_d, so both rods had the same critical load.
+    Static friction holds the resting rod a little longer: its ΔF* lies above the μ_s = μ_d one,
+    and it is a label boundary of the rod it was asked about (3 % below straight, 3 % above
+    buckled at the search's horizon)."""
+    from jaxrod.scene import Scene, make_perturbation
+
+    equal = jr.RodChannel.reference(0.3)
+    sticky = equal.with_friction(0.6, 0.3)
+    kw = dict(perturbation="random-shape", model="field", n=24, rtol=1e-4, sensitivities=())
+    f_eq = float(bd.critical_load(equal, 2e-3, **kw)[0].root)
+    f_st = float(bd.critical_load(sticky, 2e-3, **kw)[0].root)
+    assert f_st > 1.002 * f_eq
+    pert = make_perturbation("random-shape", 2e-3, 6, jax.random.key(0))
+    labels = [bool(Scene(sticky, f * f_st, pert, "field", n=24).run(t1=0.5, save_state=False).buckled)
+              for f in (0.97, 1.03)]
+    assert labels == [False, True]
+
+
+def test_list_loads_and_a_zero_tolerance_on_the_command_line(capsys):
+    assert main(["boundary", "--model", "mode", "--dF", "5,20", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["dF"] for r in rows] == [5.0, 20.0]
+    with pytest.raises(SystemExit) as exc:
+        main(["boundary", "--rtol", "0"])
+    assert exc.value.code == 2 and "--rtol" in capsys.readouterr().err

@@ -22,11 +22,14 @@ _ROD_KEYS = ("L", "d", "E", "rho_v", "nu", "R", "g")
 
 def _params_of(rod, **extra) -> dict:
     """The rod's numbers as a flat dict of leaves (μ_s = μ_d = `mu`), plus `extra`."""
-    return {"mu": rod.mu_d, **{f: getattr(rod, f) for f in _ROD_KEYS}, **extra}
+    return {"mu": rod.mu_d, "mu_excess": rod.mu_s - rod.mu_d, **{f: getattr(rod, f) for f in _ROD_KEYS},
+            **extra}
 
 
 def _rod_of(rod_type, p: dict):
-    return rod_type(*(p[f] for f in _ROD_KEYS), p["mu"], p["mu"])
+    """The rod of the parameters: μ_d = `mu`, μ_s = `mu` + `mu_excess` (so a sensitivity to `mu`
+    moves both coefficients together, and a rod with μ_s > μ_d keeps its static excess)."""
+    return rod_type(*(p[f] for f in _ROD_KEYS), p["mu"] + p["mu_excess"], p["mu"])
 
 
 def _resolution(rod, dF, model, n, mode, dt):
@@ -74,7 +77,7 @@ def critical_velocity(
     dF). Pure and vmappable over `rod` leaves, `dF` and `key`.
 
     **Returns:** `(RootResult, sensitivities)`: the root in m/s and dv₀*/dp for p in
-    `sensitivities` (names: `mu` (μ_s = μ_d), `dF`, `R`, any rod field).
+    `sensitivities` (names: `mu` (μ_s and μ_d moved together), `dF`, `R`, any rod field).
     """
     dtype = jnp.result_type(float)
     dF = jnp.asarray(dF, dtype)

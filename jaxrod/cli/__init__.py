@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import _Parser, _check_writable, _fail, _finite_float, _add_rod_options, _positive_int, _range_spec, _use_all_cpu_cores
+from ._common import _Parser, _check_writable, _fail, _finite_float, _add_rod_options, _positive_int, _range_spec, _rtol, _use_all_cpu_cores
 from .theory import _cmd_theory
 from .simulate import _cmd_simulate
 from .map import _cmd_map
@@ -60,8 +60,8 @@ def build_parser() -> argparse.ArgumentParser:
     mp = sub.add_parser("map", help="E3 stability map over (dF, v0): the main job")
     mp.add_argument("--mu", type=_finite_float, default=None,
                     help="friction coefficient (default: 0.3 and, in the same figure, 0)")
-    mp.add_argument("--dF", type=_range_spec, default="0.5:64:20", help="LO:HI:N loads above F0_6 [N] (log-spaced)")
-    mp.add_argument("--v0", type=_range_spec, default="0.001:0.2:24", help="LO:HI:N sine amplitudes [m/s] (log-spaced)")
+    mp.add_argument("--dF", type=_range_spec, default="0.5:64:20", help="LO:HI:N loads above F0_6 [N] (log-spaced), or a list A,B,C")
+    mp.add_argument("--v0", type=_range_spec, default="0.001:0.2:24", help="LO:HI:N sine amplitudes [m/s] (log-spaced), or a list A,B,C")
     mp.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
@@ -72,18 +72,18 @@ def build_parser() -> argparse.ArgumentParser:
 
     bd = sub.add_parser("boundary", help="critical sine velocity v0*(dF) by root search")
     bd.add_argument("--mu", type=_finite_float, default=0.3)
-    bd.add_argument("--dF", type=_range_spec, default="1:60:6", help="LO:HI:N loads above F0_6 [N]")
+    bd.add_argument("--dF", type=_range_spec, default="1:60:6", help="LO:HI:N loads above F0_6 [N], or a list A,B,C")
     bd.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     bd.add_argument("--n", type=_positive_int, default=None)
-    bd.add_argument("--rtol", type=_finite_float, default=1e-6, help="relative tolerance (default 1e-6)")
+    bd.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
     bd.add_argument("--out", default=None, help="folder for boundary.csv and boundary.png")
     bd.add_argument("--json", action="store_true")
     _add_rod_options(bd)
     bd.set_defaults(func=_cmd_boundary)
 
     cl = sub.add_parser("critical-load", help="critical load dF*(mu) by root search")
-    cl.add_argument("--mu", type=_range_spec, default="0.05:1:6", help="LO:HI:N friction coefficients")
+    cl.add_argument("--mu", type=_range_spec, default="0.05:1:6", help="LO:HI:N friction coefficients, or a list A,B,C")
     cl.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
                     default="sine")
     cl.add_argument("--amplitude", type=_finite_float, default=0.015,
@@ -94,7 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     cl.add_argument("--n", type=_positive_int, default=None)
     cl.add_argument("--max-dF", dest="max_dF", type=_finite_float, default=100.0, help="bracket top [N]")
-    cl.add_argument("--rtol", type=_finite_float, default=1e-6)
+    cl.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
     cl.add_argument("--out", default=None)
     cl.add_argument("--json", action="store_true")
     cl.set_defaults(func=_cmd_critical_load)

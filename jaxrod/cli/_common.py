@@ -96,9 +96,17 @@ def _positive_int(text: str) -> int:
 
 
 def _range_spec(text: str):
-    """LO:HI:N -> N log-spaced values from LO to HI (linear if LO <= 0)."""
+    """LO:HI:N -> N log-spaced values from LO to HI (linear if LO <= 0); or a list A,B,C."""
     import numpy as np
 
+    if "," in text or (":" not in text):
+        try:
+            values = np.array([float(v) for v in text.split(",") if v.strip()])
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not of the form LO:HI:N or A,B,C (numbers)") from None
+        if values.size == 0 or not np.all(np.isfinite(values)):
+            raise argparse.ArgumentTypeError(f"{text!r}: need finite numbers")
+        return values
     parts = text.split(":")
     if len(parts) != 3:
         raise argparse.ArgumentTypeError(f"{text!r} is not of the form LO:HI:N")
@@ -111,6 +119,14 @@ def _range_spec(text: str):
     if n == 1:
         return np.array([lo])
     return np.geomspace(lo, hi, n) if lo > 0 else np.linspace(lo, hi, n)
+
+
+def _rtol(text: str) -> float:
+    """A relative tolerance in (0, 0.5)."""
+    x = _finite_float(text)
+    if not 0 < x < 0.5:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a relative tolerance in (0, 0.5)")
+    return x
 
 
 def _write_rows(path, rows):
