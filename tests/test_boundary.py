@@ -165,3 +165,18 @@ def test_list_loads_and_a_zero_tolerance_on_the_command_line(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["boundary", "--rtol", "0"])
     assert exc.value.code == 2 and "--rtol" in capsys.readouterr().err
+
+
+def test_single_mode_indicator_calls_a_state_held_by_static_friction_stable():
+    """μ_s > μ_d: a mode at rest at A₀ between f_d/|k| and f_s/|k| is held (the exact solution
+    keeps it stuck), so the indicator must be ≤ 0 there (it measured A against f_d/|k| and called
+    it buckled); beyond f_s/|k| it runs away (> 0). With μ_s = μ_d nothing changes."""
+    k, f_s, f_d = -4.0, 3.0, 2.0  # f_d/|k| = 0.5, f_s/|k| = 0.75
+    held = bd.single_mode_indicator(0.0, k, f_s, f_d, A0=0.6)
+    A, _, stuck, _, _ = jr.exact_solution(0.6, 0.0, k, f_s, f_d, 5.0)
+    assert bool(stuck) and float(A) == pytest.approx(0.6)
+    assert float(held) <= 0.0
+    assert float(bd.single_mode_indicator(0.0, k, f_s, f_d, A0=0.8)) > 0.0
+    same = bd.single_mode_indicator(0.3, k, 2.0, 2.0)
+    A, *_ = jr.exact_solution(0.0, 0.3, k, 2.0, 2.0, 10.0 / 2.0)
+    assert float(same) == pytest.approx(float(A) / 0.5 - 1.0, rel=1e-12)

@@ -15,11 +15,14 @@ __all__ = ['single_mode_indicator', 'rod_indicator', 'smooth_single_mode_indicat
 
 
 def single_mode_indicator(Adot0, k, f_s, f_d, A0=0.0, horizon: float = 10.0):
-    """g = A(T)/a − 1 of the exact single-mode solution at T = `horizon`/√|k|, a = f_d/|k|
-    (k < 0 required: for k ≥ 0 there is no boundary and g is −1 or nan)."""
+    """g = A(T)/a − 1 of the exact single-mode solution at T = `horizon`/√|k|, a = f_s/|k| the
+    largest amplitude static friction holds (k < 0 required: for k ≥ 0 there is no boundary and
+    g is −1 or nan). With μ_s = μ_d, a is the saddle f/|k| and g is smooth at the root; with
+    μ_s > μ_d a state that stops between f_d/|k| and f_s/|k| is held (g ≤ 0), one that stops
+    beyond runs away, and g jumps at the root (the bracket still converges, by bisection)."""
     lam = jnp.sqrt(jnp.abs(k))
     T = horizon / lam
-    a = f_d / jnp.abs(k)
+    a = f_s / jnp.abs(k)
     sign = jnp.where(Adot0 < 0, -1.0, 1.0)  # perturbations of either sign: mirror to Ȧ₀ > 0
     A, _, _, _, _ = exact_solution(sign * A0, jnp.abs(Adot0), k, f_s, f_d, T)
     return A / a - 1.0
