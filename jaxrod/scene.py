@@ -266,12 +266,19 @@ class Scene(eqx.Module):
 
     def dominant_mode(self, q):
         """The dominant sine mode of the state `q` (the model's own mode for one mode)."""
-        from .modal import dominant_mode
+        return dominant_mode_of(self.kind, q, self.mode)
 
-        if self.kind == "field":
-            return dominant_mode(q)
-        if self.kind == "rod3d":
-            return dominant_mode(self.model().theta(q.x)[..., 1:-1])
-        if self.kind == "galerkin":
-            return jnp.argmax(jnp.abs(q), axis=-1) + 1
-        return jnp.asarray(self.mode)
+
+def dominant_mode_of(kind: str, q, mode: int = 6):
+    """The dominant sine mode of a state `q` of a model of `kind` (any leading axes): of θ at the
+    nodes (field, 3D rod), the largest modal amplitude (Galerkin), or `mode` (single mode)."""
+    from .modal import dominant_mode
+    from .rod3d.state import wall_angle
+
+    if kind == "field":
+        return dominant_mode(q)
+    if kind == "rod3d":
+        return dominant_mode(wall_angle(q.x)[..., 1:-1])
+    if kind == "galerkin":
+        return jnp.argmax(jnp.abs(q), axis=-1) + 1
+    return jnp.asarray(mode)

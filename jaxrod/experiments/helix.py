@@ -34,7 +34,7 @@ from .. import theory
 from ..params import RodChannel
 from ..integrators.base import save_grid
 from ..output import subplots, write_csv
-from ..rod3d.model import Rod3D, step_limit
+from ..rod3d import Rod3D, step_limit
 
 __all__ = ["load_path", "helix_measures", "helix_theory", "post_buckling", "HELIX_SIZES"]
 

@@ -17,7 +17,7 @@ from ..integrators import ProjectedVerlet
 from ..integrators.base import RunOptions
 from ..output import subplots, write_csv
 from ..simulate import simulate
-from ..rod3d.model import Rod3D, sine_velocity, step_limit
+from ..rod3d import Rod3D, sine_velocity, step_limit
 
 __all__ = ["run", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "rolling_check", "SIZES"]
 

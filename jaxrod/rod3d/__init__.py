@@ -4,5 +4,5 @@ from .model import Rod3D as Rod3D
 from .state import Rod3DForces as Rod3DForces
 from .state import Rod3DPosition as Rod3DPosition
 from .state import Rod3DVelocity as Rod3DVelocity
-from .model import step_limit as step_limit
-from .model import sine_velocity as sine_velocity
+from .state import sine_velocity as sine_velocity
+from .stiffness import step_limit as step_limit

@@ -13,24 +13,21 @@ effect of α, is in docs/physics.md §7.
 from __future__ import annotations
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 from ..models.base import AbstractModel
 from ..params import RodChannel, _concrete
-from .._numerics import float_leaf, safe_norm
+from .._numerics import float_leaf
+from . import energy
 from .contact import friction_pass
-from .so3 import exp_so3, log_so3, skew
-from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, straight_state
+from .so3 import exp_so3
+from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, straight_state, wall_angle
 from .stiffness import max_frequency
 
-__all__ = ["Rod3D", "Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "step_limit", "sine_velocity"]
+__all__ = ["Rod3D"]
 
-E3 = np.array([0.0, 0.0, 1.0])
-# Directors of a straight rod along x: d1 = y, d2 = z, d3 = x (right-handed).
-Q_STRAIGHT = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
 
 class Rod3D(AbstractModel):
@@ -206,58 +203,25 @@ class Rod3D(AbstractModel):
 
     # -- energies --------------------------------------------------------------------------
     def strains(self, x, Q):
-        """Shear/stretch strains σ (n, 3) and curvatures κ (n−1, 3), material frame."""
-        e = x[1:] - x[:-1]
-        sigma = jnp.einsum("jab,jb->ja", Q, e) / self.l0 - jnp.asarray(E3, e.dtype)[None, :]
-        R = jnp.einsum("jab,jcb->jac", Q[1:], Q[:-1])  # Qᵢ Q_{i−1}ᵀ
-        kappa = log_so3(R) / self.l0
-        return sigma, kappa
+        return energy.strains(self, x, Q)
 
     def elastic_terms(self, x, Q) -> dict[str, Float[Array, ""]]:
-        rod = self.rod
-        sigma, kappa = self.strains(x, Q)
-        kGA = self.shear_coefficient * rod.GA
-        l0 = self.l0
-        return dict(
-            stretch=0.5 * l0 * rod.EA * jnp.sum(sigma[:, 2] ** 2),
-            shear=0.5 * l0 * kGA * jnp.sum(sigma[:, :2] ** 2),
-            bend=0.5 * l0 * rod.EI * jnp.sum(kappa[:, :2] ** 2),
-            twist=0.5 * l0 * rod.GJ * jnp.sum(kappa[:, 2] ** 2),
-        )
+        return energy.elastic_terms(self, x, Q)
 
     def penetration(self, x) -> tuple[Float[Array, " n1"], Float[Array, "n1 3"]]:
-        """Penetration δ = r − R of each node beyond the clearance (negative: a gap) and the
-        outward radial unit e_r."""
-        yz = x[:, 1:]
-        r = safe_norm(yz)
-        rs = jnp.where(r > 0, r, 1.0)
-        down = jnp.broadcast_to(jnp.array([0.0, -1.0], x.dtype), yz.shape)
-        e_r = jnp.concatenate([jnp.zeros_like(r)[:, None], jnp.where(r[:, None] > 0, yz / rs[:, None], down)], -1)
-        return r - self.rod.R, e_r
+        return energy.penetration(self, x)
 
     def contact_energy(self, x):
-        if not self.channel:
-            return jnp.zeros((), x.dtype)
-        delta, _ = self.penetration(x)
-        pen = jnp.maximum(delta, 0.0)
-        return jnp.sum(self.voronoi * self.contact_stiffness * 0.4 * pen**2.5)
+        return energy.contact_energy(self, x)
 
     def external_energy(self, x):
-        """Gravity (zero on the channel bottom, z = −R) and body-force potentials [J]."""
-        grav = -jnp.sum(self.mass * (x[:, 2] + self.rod.R)) * self.g_vec[2]
-        body = -jnp.sum(self.voronoi * (x @ self.body_force))
-        if self.control == "load":
-            body = body + self.end_load * x[-1, 0]
-        return grav + body
+        return energy.external_energy(self, x)
 
     def potential(self, x, Q):
-        return sum(self.elastic_terms(x, Q).values()) + self.contact_energy(x) + self.external_energy(x)
+        return energy.potential(self, x, Q)
 
     def kinetic_terms(self, v, w):
-        return dict(
-            kinetic=0.5 * jnp.sum(self.mass[:, None] * v**2),
-            rotational=0.5 * jnp.sum(self.inertia[None, :] * w**2),
-        )
+        return energy.kinetic_terms(self, v, w)
 
     def energy_terms(self, q: Rod3DPosition, v: Rod3DVelocity, t=None) -> dict[str, Float[Array, ""]]:
         """Every energy by kind [J]: kinetic, rotational, stretch, shear, bend, twist,
@@ -368,36 +332,13 @@ class Rod3D(AbstractModel):
 
     # -- forces ----------------------------------------------------------------------------
     def generalized_forces(self, x, Q):
-        """Conservative node forces (n+1, 3) [N] and material torques (n, 3) [N·m]."""
-
-        def U(x, phi):
-            Qp = Q - jnp.einsum("jab,jbc->jac", skew(phi), Q)
-            return self.potential(x, Qp)
-
-        gx, gphi = jax.grad(U, argnums=(0, 1))(x, jnp.zeros((self.n, 3), x.dtype))
-        return -gx, -gphi
+        return energy.generalized_forces(self, x, Q)
 
     def contact_normal(self, x, v):
-        """Normal force per node [N] (elastic + Hunt–Crossley, ≥ 0), its damping part [N] and
-        the outward radius e_r."""
-        delta, e_r = self.penetration(x)
-        if not self.channel:
-            z = jnp.zeros_like(delta)
-            return z, z, e_r
-        pen = jnp.maximum(delta, 0.0)
-        el = self.voronoi * self.contact_stiffness * pen**1.5
-        ddot = jnp.sum(v * e_r, -1)
-        total = jnp.maximum(el * (1.0 + self.contact_damping * ddot), 0.0)
-        return total, total - el, e_r
+        return energy.contact_normal(self, x, v)
 
     def forces(self, x, Q, v):
-        """Everything a kick needs at (x, Q) with velocities v: node forces [N] (elastic,
-        contact, gravity, body, damping), material torques [N·m], normal forces [N] and the
-        non-conservative part of the node forces [N] (contact and viscous damping)."""
-        fx, tau = self.generalized_forces(x, Q)
-        N, N_damp, e_r = self.contact_normal(x, v)
-        f_damp = -N_damp[:, None] * e_r - self.damping * self.mass[:, None] * v
-        return fx + f_damp, tau, N, f_damp
+        return energy.forces(self, x, Q, v)
 
     # -- friction ----------------------------------------------------------------------------
     def friction_step(self, friction, x, v, Q, w, N, stuck, h):
@@ -438,26 +379,9 @@ class Rod3D(AbstractModel):
     # -- observables -------------------------------------------------------------------------
     def theta(self, x) -> Float[Array, " n1"]:
         """Angle of each node from the channel bottom [rad] (as θ in the field model)."""
-        return jnp.arctan2(x[:, 1], -x[:, 2])
+        return wall_angle(x)
 
     def axial_force(self, x, Q) -> Float[Array, " n"]:
         """Compressive axial force of each segment, −EA σ₃ [N]."""
         sigma, _ = self.strains(x, Q)
         return -self.rod.EA * sigma[:, 2]
-
-
-def sine_velocity(model: Rod3D, v0, mode: int = 6):
-    """Lateral speed v₀ sin(mπs/L) at the n + 1 nodes [m/s] (the sine perturbation)."""
-    s = jnp.arange(model.n + 1) / model.n
-    return jnp.asarray(v0) * jnp.sin(mode * jnp.pi * s)
-
-
-@eqx.filter_jit
-def _limit(model, q):
-    return 2.0 / model.max_frequency(q)
-
-
-def step_limit(model: Rod3D, q: Rod3DPosition | None = None) -> float:
-    """The explicit step limit 2/ω_max [s] of the rod at `q` (default: straight, under its end
-    load): the stiffest of the axial, shear, bending, twist and contact vibrations."""
-    return float(_limit(model, q))

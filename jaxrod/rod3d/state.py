@@ -10,7 +10,7 @@ from jaxtyping import Array, ArrayLike, Bool, Float
 from .._numerics import float_leaf, safe_norm
 
 
-__all__ = ["Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "straight_state"]
+__all__ = ["Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "straight_state", "wall_angle", "sine_velocity"]
 
 
 class Rod3DPosition(eqx.Module):
@@ -80,3 +80,15 @@ def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_off
     v, w = model.constrain(v, jnp.zeros((n, 3), dtype))
     at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
     return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest)
+
+
+def wall_angle(x: Float[Array, "... n1 3"]) -> Float[Array, "... n1"]:
+    """Angle of each node from the channel bottom [rad], θ = atan2(y, −z) (as in the field
+    model); `x` may carry leading batch or time axes."""
+    return jnp.arctan2(x[..., 1], -x[..., 2])
+
+
+def sine_velocity(model, v0, mode: int = 6):
+    """Lateral speed v₀ sin(mπs/L) at the n + 1 nodes of `model` [m/s] (the sine perturbation)."""
+    s = jnp.arange(model.n + 1) / model.n
+    return jnp.asarray(v0) * jnp.sin(mode * jnp.pi * s)

@@ -3,13 +3,14 @@
 
 from __future__ import annotations
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .so3 import skew
 
-__all__ = ["max_frequency"]
+__all__ = ["max_frequency", "step_limit"]
 
 
 def max_frequency(model, q, iters: int = 80) -> Float[Array, ""]:
@@ -49,3 +50,14 @@ def max_frequency(model, q, iters: int = 80) -> Float[Array, ""]:
 
     dx, dp, lam = jax.lax.fori_loop(0, iters, body, (dx, dp, jnp.zeros((), state.x.dtype)))
     return jnp.sqrt(jnp.abs(lam))
+
+
+@eqx.filter_jit
+def _limit(model, q):
+    return 2.0 / model.max_frequency(q)
+
+
+def step_limit(model, q=None) -> float:
+    """The explicit step limit 2/ω_max [s] of the rod `model` at `q` (default: straight, under its
+    end load): the stiffest of the axial, shear, bending, twist and contact vibrations."""
+    return float(_limit(model, q))

@@ -15,9 +15,8 @@ from .. import theory
 from .._results import RESULTS
 from ..integrators import ProjectedVerlet
 from ..integrators.base import RunOptions, save_grid
-from ..modal import dominant_mode
 from ..params import RodChannel
-from ..scene import DEFAULT_SEGMENTS, Scene, default_nodes, make_perturbation
+from ..scene import dominant_mode_of, DEFAULT_SEGMENTS, Scene, default_nodes, make_perturbation
 from .spec import ROD_FIELDS, SweepSpec, _STIFFNESS_FIELDS
 
 __all__ = ['N_SAVE']
@@ -88,14 +87,7 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
         return run.finished(N_SAVE)
 
     def outputs(ok, model, run):
-        if spec.model == "field":
-            dom = dominant_mode(run.q)
-        elif spec.model == "rod3d":
-            dom = dominant_mode(model.theta(run.q.x)[1:-1])
-        elif spec.model == "galerkin":
-            dom = jnp.argmax(jnp.abs(run.q)) + 1
-        else:
-            dom = jnp.asarray(spec.mode)
+        dom = dominant_mode_of(spec.model, run.q, spec.mode)
         code = integrator.result(model, run, jnp.asarray(h, run.t.dtype))
         result = jnp.where(ok & model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
         return {
@@ -175,7 +167,7 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
 def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
     """n (default 60 segments, E1/E6's) and dt: 0.5 of the smallest explicit limit over the
     rods at the largest load (a given `spec.dt` must lie below it)."""
-    from ..rod3d.model import Rod3D, step_limit
+    from ..rod3d import Rod3D, step_limit
 
     n = spec.n or DEFAULT_SEGMENTS
     limits = []
