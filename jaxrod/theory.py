@@ -118,6 +118,17 @@ def reference_load(rod: RodChannel) -> Float[Array, ""]:
     reference rod). Every ΔF in jaxrod is measured from it."""
     return frictionless_load(rod, critical_mode(rod))
 
+def max_growth_rate(rod: RodChannel, F: ArrayLike) -> Float[Array, "..."]:
+    """λ_max = max over κ of √(−k(κ)) [1/s]: the fastest exponential growth of any lateral
+    wave of the frictionless rod under the load `F` [N] (P3 with a continuous wavenumber:
+    −k(κ) = κ²(F − EIκ²)/ρ − ρg/(ρR) is largest at κ² = F/(2EI)); 0 if nothing grows. Sliding
+    friction is a constant force and does not change it: every departure from a marginally held
+    state grows at most this fast."""
+    F = _f(F)
+    lam2 = F**2 / (4 * rod.EI * rod.rho) - rod.w / (rod.R * rod.rho)
+    return jnp.sqrt(jnp.maximum(lam2, 0.0))
+
+
 def velocity_intercept(k: ArrayLike, f: ArrayLike) -> Float[Array, "..."]:
     """Ȧ_cr = f/√|k| (P6): the largest pure velocity perturbation that leaves a loaded
     (k < 0) single mode stable. `inf` where k ≥ 0 (every trajectory is bounded)."""

@@ -72,27 +72,33 @@ def test_invalid_bracket_is_reported():
     assert int(r.result) == bd.ROOT_RESULTS.invalid_bracket
 
 
-def test_field_newton_root_agrees_with_dense_bisection_and_fd_sensitivity():
-    kw = dict(model="field", n=32, dt=1e-3, bracket=(2e-3, 0.2), rtol=1e-10, max_iter=80)
-    res, sens = bd.critical_velocity(ROD, 5.0, sensitivities=("mu",), **kw)
+@pytest.mark.parametrize("model,dF", [("field", 2.0), ("field", 12.0), ("galerkin", 5.0)])
+def test_departure_root_is_the_label_boundary_in_few_runs(model, dF):
+    """The departure search against label bisection of the same runs (an independent use of the
+    label only), and its IFT sensitivity against a finite difference of two root solves."""
+    n = 32 if model == "field" else 12
+    res, sens = bd.critical_velocity(ROD, dF, model=model, n=n, rtol=1e-6, sensitivities=("mu",))
     assert int(res.result) == 0
-    lo, hi = float(res.lo), float(res.hi)
-    assert lo <= float(res.root) <= hi and (hi - lo) <= 1e-9 * hi
-
-    def buckled(v0):
-        sc = jr.scene.Scene(ROD, 5.0, jr.SineVelocity(v0, 6.0), "field", 32, 6, 1e-3)
-        return bd.rod_indicator(sc) > 0
-
-    # dense bisection on the label, started from a bracket 4x wider than Newton's final one
-    w = hi - lo
-    blo, bhi = jr.search.bisect(buckled, lo - 2 * w, hi + 2 * w, 40, geometric=False)
-    assert abs(0.5 * float(blo + bhi) - float(res.root)) <= 2 * w
-    # dv0*/dmu by IFT against a finite difference of two root solves
-    h = 1e-4
-    up, _ = bd.critical_velocity(ROD.with_friction(0.3 + h), 5.0, sensitivities=(), **kw)
-    dn, _ = bd.critical_velocity(ROD.with_friction(0.3 - h), 5.0, sensitivities=(), **kw)
+    assert float(res.lo) <= float(res.root) <= float(res.hi)
+    dt = jr.scene.Scene(ROD, dF, kind=model, n=n).step()
+    label = lambda v: bd.crossing_state(jr.scene.Scene(ROD, dF, jr.SineVelocity(v, 6.0), model, n, 6, dt))[1]
+    bis = jax.jit(lambda: bd.bisection(label, 1e-4, 1.0, rtol=1e-8))()
+    assert int(bis.result) == 0
+    assert float(res.root) == pytest.approx(float(bis.root), rel=1e-6)
+    # from the wide bracket, with no prediction: well under bisection to the same tolerance for
+    # the field model; the Galerkin model leaves the marginal state slowly (u/δ falls from 86 to
+    # 3 s⁻¹ near its root), and the search is then about as costly as bisection
+    same = jax.jit(lambda: bd.bisection(label, 1e-4, 1.0, rtol=1e-6))()
+    if model == "field":
+        assert 3 * int(res.evaluations) <= 2 * int(same.evaluations)
+    else:
+        assert int(res.evaluations) <= int(same.evaluations)
+    h = 1e-3
+    kw = dict(model=model, n=n, dt=dt, rtol=1e-10, sensitivities=())
+    up, _ = bd.critical_velocity(ROD.with_friction(0.3 + h), dF, **kw)
+    dn, _ = bd.critical_velocity(ROD.with_friction(0.3 - h), dF, **kw)
     fd = (float(up.root) - float(dn.root)) / (2 * h)
-    assert float(sens["mu"]) == pytest.approx(fd, rel=1e-3)
+    assert float(sens["mu"]) == pytest.approx(fd, rel=2e-3)
 
 
 def test_smooth_law_continuation_converges_to_the_sharp_root():

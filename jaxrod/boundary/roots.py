@@ -11,7 +11,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
 
-__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'bisection', 'implicit_sensitivities', 'continuation']
+__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'implicit_sensitivities', 'continuation']
 
 
 class ROOT_RESULTS:
@@ -46,6 +46,11 @@ class RootResult(eqx.Module):
     derivative: Float[Array, ""]
     evaluations: Int[Array, ""]
     result: Int[Array, ""]
+
+
+# measured on the field model (benchmarks/boundary_cost.py): aiming 5 % short of the predicted
+# root and stepping back a quarter of the bracket after an overshoot
+_SHORT, _BACK = 0.05, 0.25
 
 
 def _mid(lo, hi, geometric):
@@ -133,9 +138,112 @@ def safeguarded_newton(
     return RootResult(root, lo, hi, gx, dx, evals, result)
 
 
-def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bool = True) -> RootResult:
-    """Plain bisection on the sign of g (the baseline; no derivatives), to `rtol`·|x|."""
+def departure_secant(
+    evaluate: Callable,
+    lo,
+    hi,
+    rate_bound,
+    *,
+    start=None,
+    rtol: float = 1e-6,
+    max_iter: int = 40,
+    geometric: bool = True,
+) -> RootResult:
+    """The boundary x* in [`lo`, `hi`] from runs that stop as soon as their label is known:
+    `evaluate(x)` returns `(buckled, u)` with u ≈ λ·(x − x*) > 0 for a buckled run (see
+    [`jaxrod.boundary.departure_rate`][]) and no number for a stable one.
+
+    Each iteration steps from the lowest buckled point x₁ to x₁ − u₁/s, with s the slope of u
+    between the two lowest buckled points (a secant on the linear branch), or `rate_bound`
+    (an upper bound on λ, e.g. [`jaxrod.theory.max_growth_rate`][], or a function of x giving
+    one; the step then stops short
+    of the root and stays on the buckled side) while only one is known or the secant slope is
+    not positive. A step that leaves the bracket (the largest stable x, the smallest buckled x)
+    becomes a bisection. Stops when the next step would be smaller than `rtol`·x₁ (the root is
+    that step's end) or the bracket is narrower than `rtol`·x.
+
+    `lo` and `hi` are trusted, not run (a stable `lo` is run only when the iteration ends next
+    to it, so that a bracket without the root is reported); the first run is at `start`
+    (default `hi`), e.g. a prediction from a neighbouring root.
+
+    **Returns:** a [`jaxrod.boundary.RootResult`][] (`value`: u at x₁; `derivative`: the slope
+    s used last; pure and vmappable).
+    """
     dtype = jnp.result_type(float)
+    lo = jnp.asarray(lo, dtype)
+    hi = jnp.asarray(hi, dtype)
+    bound = rate_bound if callable(rate_bound) else (lambda x, b=jnp.asarray(rate_bound, dtype): b)
+    x0 = hi if start is None else jnp.clip(jnp.asarray(start, dtype), lo, hi)
+    nan = jnp.asarray(jnp.nan, dtype)
+    lo_bound, hi_bound = lo, hi
+
+    def candidate(lo, hi, x1, u1, x2, u2, again):
+        have1, have2 = jnp.isfinite(u1), jnp.isfinite(u2)
+        secant = (u2 - u1) / (x2 - x1)
+        lam = bound(jnp.where(have1, x1, hi))
+        s = jnp.where(have2 & (secant > 0) & jnp.isfinite(secant), jnp.minimum(secant, lam), lam)
+        c = x1 - u1 / s
+        small = have1 & (jnp.abs(x1 - c) <= rtol * jnp.abs(x1))
+        # aim a little short of the predicted root: an overshoot costs a run that only moves lo
+        aim = x1 - (1 - _SHORT) * u1 / s
+        # after an overshoot the root lies just above lo: step a fraction of the way back up
+        # (half of it after a second stable run in a row)
+        back = lo + jnp.where(again, 0.5, _BACK) * (x1 - lo)
+        # before the first buckled run: grow from the stable side by at most 25 %
+        fallback = jnp.where(have1, jnp.where(lo > lo_bound, back, _mid(lo, hi, geometric)),
+                             jnp.minimum(_mid(lo, hi, geometric), lo * 1.25))
+        ok = have1 & jnp.isfinite(aim) & (aim > lo) & (aim < hi)
+        return jnp.where(ok, aim, fallback), small & (c > lo), s
+
+    # state: next x, lo, hi, (x1, u1) lowest buckled, (x2, u2) second lowest, lo run?, n,
+    # done, invalid, root, slope, last run stable?
+    def cond(st):
+        return ~st[9] & (st[8] < max_iter)
+
+    def body(st):
+        x, lo, hi, x1, u1, x2, u2, lo_run, n, done, invalid, root, s, was_stable = st
+        buckled, u = evaluate(x)
+        n = n + 1
+        invalid = invalid | (buckled & (x <= lo_bound)) | (~buckled & (x >= hi_bound))
+        lower = buckled & (x < x1)
+        x2, u2 = jnp.where(lower, x1, jnp.where(buckled & (x < x2), x, x2)), jnp.where(
+            lower, u1, jnp.where(buckled & (x < x2), u, u2))
+        x1, u1 = jnp.where(lower, x, x1), jnp.where(lower, u, u1)
+        hi = jnp.where(buckled, jnp.minimum(hi, x), hi)
+        lo = jnp.where(buckled, lo, jnp.maximum(lo, x))
+        lo_run = lo_run | (~buckled & (x <= lo_bound))
+        c, small, s = candidate(lo, hi, x1, u1, x2, u2, was_stable & ~buckled)
+        narrow = (hi - lo) <= rtol * jnp.abs(hi)
+        # ending next to an untested lower end: run it once, to tell a root from a bad bracket
+        check_lo = (narrow | small) & (lo <= lo_bound) & ~lo_run
+        finished = invalid | ((small | narrow) & ~check_lo)
+        root = jnp.where(small, c, _mid(lo, hi, False))
+        x_next = jnp.where(check_lo, lo_bound, c)
+        return x_next, lo, hi, x1, u1, x2, u2, lo_run, n, finished, invalid, root, s, ~buckled
+
+    inf = jnp.asarray(jnp.inf, dtype)
+    st = (x0, lo, hi, inf, nan, inf, nan, jnp.array(False), jnp.array(0), jnp.array(False),
+          jnp.array(False), nan, nan, jnp.array(False))
+    x, lo, hi, x1, u1, x2, u2, lo_run, n, done, invalid, root, s, _ = jax.lax.while_loop(cond, body, st)
+    result = jnp.where(
+        invalid, ROOT_RESULTS.invalid_bracket,
+        jnp.where(done, ROOT_RESULTS.converged, ROOT_RESULTS.max_iterations),
+    ).astype(jnp.int32)
+    # a failed search names no root (its bracket still says what is known)
+    root = jnp.where(done & ~invalid, root, jnp.nan)
+    return RootResult(root, lo, jnp.minimum(hi, x1), u1, s, n.astype(jnp.int32), result)
+
+
+def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bool = True) -> RootResult:
+    """Plain bisection on the sign of g (the baseline; no derivatives), to `rtol`·|x|. `g` may
+    return a boolean label (True: above the root)."""
+    dtype = jnp.result_type(float)
+    label = g
+
+    def g(x):
+        y = jnp.asarray(label(x))
+        return jnp.where(y, 1.0, 0.0).astype(dtype) if y.dtype == bool else y
+
     lo = jnp.asarray(lo, dtype)
     hi = jnp.asarray(hi, dtype)
     g_lo, g_hi = g(lo), g(hi)

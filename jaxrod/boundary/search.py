@@ -1,5 +1,12 @@
 """The user-level searches: the critical velocity v₀* and the critical load ΔF* of a rod, single
-points (pure, vmappable) and curves of them."""
+points (pure, vmappable) and curves of them.
+
+The reduced rod models are searched with runs that stop as soon as their label is known and the
+departure rate of [`jaxrod.boundary.departure_rate`][] (`method="departure"`, the default), or by
+bisection on the label alone (`method="bisection"`, the baseline); the single mode by Newton on
+its exact solution. Curves go along the loads in order, each search started from a prediction
+made of its neighbours' roots (`continuation=True`), or all points at once (vmapped).
+"""
 
 from __future__ import annotations
 
@@ -11,10 +18,10 @@ import jax.numpy as jnp
 from .. import theory
 from ..models import SingleMode
 from ..scene import Scene, make_perturbation
-from .indicators import rod_indicator, single_mode_indicator
-from .roots import implicit_sensitivities, safeguarded_newton
+from .indicators import crossing_state, departure_rate, departure_sensitivities, single_mode_indicator
+from .roots import bisection, departure_secant, implicit_sensitivities, safeguarded_newton
 
-__all__ = ['critical_velocity', 'critical_load', 'boundary_curve', 'critical_load_curve']
+__all__ = ['METHODS', 'critical_velocity', 'critical_load', 'boundary_curve', 'critical_load_curve']
 
 
 _ROD_KEYS = ("L", "d", "E", "rho_v", "nu", "R", "g")
@@ -52,6 +59,29 @@ def _scene(rod, dF, v0, kind, n, mode, dt, perturbation, key):
     return Scene(rod, dF, pert, kind, n, mode, dt)
 
 
+METHODS = ("departure", "bisection")
+
+
+def _check_method(method, model):
+    if method not in METHODS:
+        raise ValueError(f"method = {method!r} is invalid: expected one of {METHODS}.")
+    if model == "rod3d":
+        raise ValueError("model = 'rod3d' is not searched here: use jaxrod.experiments.rod3d "
+                         "(label bisection of the 3D rod) or `jaxrod boundary --model rod3d`.")
+
+
+def _label(scene_of, t1):
+    return lambda x: crossing_state(scene_of(x), t1)[1]
+
+
+def _search(scene_of, lo, hi, lam, method, start, rtol, max_iter, t1, geometric):
+    """The root of the label of `scene_of(x)` in [lo, hi] by `method`."""
+    if method == "bisection":
+        return bisection(_label(scene_of, t1), lo, hi, rtol, max_iter, geometric=geometric)
+    return departure_secant(lambda x: departure_rate(scene_of, x, t1), lo, hi, lam, start=start,
+                            rtol=rtol, max_iter=max_iter, geometric=geometric)
+
+
 def critical_velocity(
     rod,
     dF,
@@ -63,27 +93,33 @@ def critical_velocity(
     dt: float | None = None,
     key=None,
     bracket=(1e-4, 1.0),
-    rtol: float = 1e-8,
-    max_iter: int = 40,
-    t1: float = 0.5,
+    start=None,
+    method: str = "departure",
+    rtol: float = 1e-6,
+    max_iter: int = 60,
+    t1: float = 2.0,
     horizon: float = 10.0,
     sensitivities: tuple[str, ...] = ("mu", "dF"),
 ):
     """v₀* [m/s]: the smallest perturbation amplitude that buckles the rod at ΔF [N].
 
     `model="mode"` uses the exact single-mode solution (sine perturbation of `mode`, whose
-    amplitude is the lateral speed v₀ = R·Ȧ₀); `"field"`/`"galerkin"` use the projected
-    Verlet run of a [`jaxrod.scene.Scene`][] (`n`, `dt` static: pass them when vmapping over
-    dF). Pure and vmappable over `rod` leaves, `dF` and `key`.
+    amplitude is the lateral speed v₀ = R·Ȧ₀) and Newton's method; `"field"`/`"galerkin"` run a
+    [`jaxrod.scene.Scene`][] until it sticks or buckles (at most `t1` [s]) and search by `method`
+    (`"departure"`: [`jaxrod.boundary.departure_secant`][], first run at `start` if given, e.g. a
+    prediction; `"bisection"`: on the label). `n`, `dt` are static: pass them when vmapping over
+    dF. Pure and vmappable over `rod` leaves, `dF`, `start` and `key`.
 
-    **Returns:** `(RootResult, sensitivities)`: the root in m/s and dv₀*/dp for p in
-    `sensitivities` (names: `mu` (μ_s and μ_d moved together), `dF`, `R`, any rod field).
+    **Returns:** `(RootResult, sensitivities)`: the root in m/s (`nan` unless converged) and
+    dv₀*/dp for p in `sensitivities` (names: `mu` (μ_s and μ_d moved together), `dF`, `R`, any
+    rod field) by the implicit function theorem.
     """
     dtype = jnp.result_type(float)
     dF = jnp.asarray(dF, dtype)
     key = jax.random.key(0) if key is None else key
-
+    _check_method(method, model)
     rod_of = lambda p: _rod_of(type(rod), p)
+    params = _params_of(rod, dF=dF)
 
     if model == "mode":
         def g2(v0, p):
@@ -91,18 +127,20 @@ def critical_velocity(
             F = theory.reference_load(r) + p["dF"]
             m = SingleMode.from_rod(r, mode, F=F)
             return single_mode_indicator(v0 / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
-    else:
-        def g2(v0, p):
-            return rod_indicator(_scene(rod_of(p), p["dF"], v0, model, n, mode, dt, perturbation, key), t1)
 
-    if model != "mode":
-        n, dt = _resolution(rod, dF, model, n, mode, dt)
-    params = _params_of(rod, dF=dF)
-    res = safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter)
-    sens = {}
-    if sensitivities:
+        res = safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter)
         sub = {k: params[k] for k in sensitivities}
-        sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub)
+        sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub) if sub else {}
+        return res, sens
+
+    n, dt = _resolution(rod, dF, model, n, mode, dt)
+    scene_of2 = lambda v0, p: _scene(rod_of(p), p["dF"], v0, model, n, mode, dt, perturbation, key)
+    lam = theory.max_growth_rate(rod, theory.reference_load(rod) + dF)
+    res = _search(lambda v: scene_of2(v, params), bracket[0], bracket[1], lam, method, start, rtol,
+                  max_iter, t1, True)
+    sub = {k: params[k] for k in sensitivities}
+    # the lowest buckled run lies within about rtol of the root: the tangents there give dv₀*/dp
+    sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
     return res, sens
 
 
@@ -117,17 +155,20 @@ def critical_load(
     dt: float | None = None,
     key=None,
     bracket=(0.05, 100.0),
-    rtol: float = 1e-8,
-    max_iter: int = 40,
-    t1: float = 0.5,
+    start=None,
+    method: str = "departure",
+    rtol: float = 1e-6,
+    max_iter: int = 60,
+    t1: float = 2.0,
     horizon: float = 10.0,
     sensitivities: tuple[str, ...] = ("mu", "amplitude", "R"),
 ):
     """ΔF* [N]: the load above F⁰_m* at which a perturbation of `amplitude` (m/s for velocity
-    perturbations) just buckles the rod (the root of the indicator in ΔF).
+    perturbations) just buckles the rod (the root of the label in ΔF).
 
-    The bracket [N] must be positive; the search runs on log ΔF (`derivative` and `value` of
-    the result refer to that variable).
+    The bracket [N] must be positive; the search runs on log ΔF (`start` [N], `value` and
+    `derivative` of the result refer to that variable). Models and methods as
+    [`jaxrod.boundary.critical_velocity`][].
 
     **Returns:** `(RootResult, sensitivities)`, root in N, with dΔF*/dp for p in
     `sensitivities` (`mu`, `amplitude`, `R`, any rod field). For `model="mode"` with a sine
@@ -136,9 +177,14 @@ def critical_load(
     dtype = jnp.result_type(float)
     amplitude = jnp.asarray(amplitude, dtype)
     key = jax.random.key(0) if key is None else key
-
+    _check_method(method, model)
     rod_of = lambda p: _rod_of(type(rod), p)
     params = _params_of(rod, amplitude=amplitude)
+    # Loads span decades and the runs depend on them through λ ∝ √ΔF: search log ΔF.
+    lo, hi = jnp.log(jnp.asarray(bracket[0], dtype)), jnp.log(jnp.asarray(bracket[1], dtype))
+    y0 = None if start is None else jnp.log(jnp.asarray(start, dtype))
+    to_load = lambda res: eqx.tree_at(lambda r: (r.root, r.lo, r.hi), res,
+                                      (jnp.exp(res.root), jnp.exp(res.lo), jnp.exp(res.hi)))
 
     if model == "mode":
         def g2(dF, p):
@@ -146,47 +192,120 @@ def critical_load(
             F = theory.reference_load(r) + dF
             m = SingleMode.from_rod(r, mode, F=F)
             return single_mode_indicator(p["amplitude"] / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
-    else:
-        def g2(dF, p):
-            return rod_indicator(
-                _scene(rod_of(p), dF, p["amplitude"], model, n, mode, dt, perturbation, key), t1
-            )
 
-    if model != "mode":
-        n, dt = _resolution(rod, bracket[1], model, n, mode, dt)
-    # Loads span decades and the indicator depends on them through λ ∝ √ΔF: Newton works on
-    # log ΔF (6 evaluations instead of 9 for P7 from a factor-10 bracket).
-    lo, hi = jnp.log(jnp.asarray(bracket[0], dtype)), jnp.log(jnp.asarray(bracket[1], dtype))
-    res = safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, rtol, max_iter, geometric=False)
-    res = eqx.tree_at(lambda r: (r.root, r.lo, r.hi), res, (jnp.exp(res.root), jnp.exp(res.lo), jnp.exp(res.hi)))
-    sens = {}
-    if sensitivities:
+        res = to_load(safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, rtol, max_iter, geometric=False))
         sub = {k: params[k] for k in sensitivities}
-        sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub)
+        sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub) if sub else {}
+        return res, sens
+
+    n, dt = _resolution(rod, bracket[1], model, n, mode, dt)
+    scene_of2 = lambda dF, p: _scene(rod_of(p), dF, p["amplitude"], model, n, mode, dt, perturbation, key)
+    F0 = theory.reference_load(rod)
+    lam = lambda y: theory.max_growth_rate(rod, F0 + jnp.exp(y))
+    res = to_load(_search(lambda y: scene_of2(jnp.exp(y), params), lo, hi, lam, method, y0, rtol, max_iter,
+                          t1, False))
+    sub = {k: params[k] for k in sensitivities}
+    sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
     return res, sens
 
 
-def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=(1e-4, 1.0),
-                   rtol=1e-6, max_iter=60, t1=0.5):
-    """v₀*(ΔF) for an array of loads, vmapped (n and dt resolved once from the largest load).
+def _predict(xs, roots, refs, x):
+    """A root at `x` from earlier roots: the ratio root/ref (ref a theory curve of the same
+    shape) extrapolated linearly in log x from the last two, or kept from the last one."""
+    import numpy as np
+
+    if not roots:
+        return refs(x)
+    r = [np.log(a / refs(b)) for a, b in zip(roots[-2:], xs[-2:])]
+    if len(r) == 1 or xs[-1] == xs[-2]:
+        return refs(x) * np.exp(r[-1])
+    slope = (r[1] - r[0]) / (np.log(xs[-1]) - np.log(xs[-2]))
+    return refs(x) * np.exp(r[1] + slope * (np.log(x) - np.log(xs[-1])))
+
+
+def _along_curve(search, xs, refs, bracket, margin, progress):
+    """Searches along `xs` in order (host loop, one compiled search): each started at
+    (1 + `margin`)·prediction inside a bracket of a factor 4 around it (clipped to `bracket`),
+    and searched again in the full `bracket` if that one holds no root."""
+    import numpy as np
+
+    from .roots import ROOT_RESULTS
+
+    order = np.argsort(xs)
+    out = [None] * len(xs)
+    done_x, done_r = [], []
+    bar = _progress(len(xs), progress)
+    for i in order:
+        pred = float(_predict(done_x, done_r, refs, float(xs[i])))
+        lo, hi = max(bracket[0], pred / 4), min(bracket[1], pred * 4)
+        start = min(max(pred * (1 + margin), lo), hi)
+        res, sens = search(xs[i], lo, hi, start)
+        if int(res.result) == ROOT_RESULTS.invalid_bracket and (lo, hi) != tuple(bracket):
+            first = int(res.evaluations)
+            res, sens = search(xs[i], bracket[0], bracket[1], bracket[1])
+            res = eqx.tree_at(lambda r: r.evaluations, res, res.evaluations + first)
+        if int(res.result) == ROOT_RESULTS.converged:
+            done_x.append(float(xs[i]))
+            done_r.append(float(res.root))
+        out[i] = (res, sens)
+        bar.update(1)
+    bar.close()
+    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *out)
+
+
+def _progress(total, show):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, disable=not show, unit="point", desc="boundary", leave=False)
+
+
+def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=(1e-4, 1.0), rtol=1e-6,
+                   max_iter=60, t1=2.0, method="departure", continuation=True, margin=0.02, progress=False,
+                   sensitivities=("mu", "dF")):
+    """v₀*(ΔF) for an array of loads.
+
+    With `continuation` (reduced models, `method="departure"`), the loads are searched in
+    increasing order, each from a prediction: the single-mode boundary (P6) times the ratio of
+    the last two roots to it, extrapolated in log ΔF; the first run at (1 + `margin`) times
+    the prediction. Each load gets the scene's default resolution for it unless `n`/`dt` are
+    given (one compiled search per resolution). Otherwise all loads are searched at once, one
+    vmapped, jitted search over the whole `bracket` at the resolution of the largest load.
 
     **Returns:** `(RootResult, sensitivities)` with a leading batch axis.
     """
     import numpy as np
 
     dFs = np.asarray(dFs, float)
-    if model != "mode":
-        probe = Scene(rod, float(np.max(dFs)), kind=model, n=n, mode=mode, dt=dt)
-        n = probe.size()
-        dt = probe.step() if dt is None else dt
-    fn = lambda dF: critical_velocity(rod, dF, model=model, mode=mode, n=n, dt=dt, bracket=bracket,
-                                      rtol=rtol, max_iter=max_iter, t1=t1, sensitivities=("mu", "dF"))
-    return jax.jit(jax.vmap(fn))(jnp.asarray(dFs))
+    kw = dict(model=model, mode=mode, rtol=rtol, max_iter=max_iter, t1=t1, method=method,
+              sensitivities=sensitivities)
+    if not (continuation and model != "mode" and method == "departure"):
+        if model != "mode":
+            probe = Scene(rod, float(np.max(dFs)), kind=model, n=n, mode=mode, dt=dt)
+            n, dt = probe.size(), probe.step() if dt is None else dt
+        fn = lambda dF: critical_velocity(rod, dF, bracket=bracket, n=n, dt=dt, **kw)
+        return jax.jit(jax.vmap(fn))(jnp.asarray(dFs))
+
+    compiled = {}
+
+    def search(dF, lo, hi, start):
+        res = _resolution(rod, dF, model, n, mode, dt)
+        if res not in compiled:
+            compiled[res] = jax.jit(lambda dF, lo, hi, start: critical_velocity(
+                rod, dF, bracket=(lo, hi), start=start, n=res[0], dt=res[1], **kw))
+        return compiled[res](dF, lo, hi, start)
+
+    F0 = float(theory.reference_load(rod))
+
+    def p6(dF):
+        k = theory.stiffness(rod, mode, F0 + dF)
+        return float(rod.R * theory.velocity_intercept(k, theory.friction_amplitude(rod)))
+
+    return _along_curve(search, dFs, p6, bracket, margin, progress)
 
 
 def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, seed=0, model="field",
-                        n=None, dt=None, mode=6, bracket=(1e-2, 100.0), rtol=1e-6, max_iter=60, t1=0.5,
-                        rod_overrides=None):
+                        n=None, dt=None, mode=6, bracket=(1e-2, 100.0), rtol=1e-6, max_iter=60, t1=2.0,
+                        method="departure", rod_overrides=None, sensitivities=("mu", "amplitude")):
     """ΔF*(μ) for an array of friction coefficients and `realizations` random perturbations
     each (keys `fold_in(key(seed), i·realizations + r)`), vmapped.
 
@@ -209,11 +328,10 @@ def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, 
         rod = RodChannel.reference(mu=mu, **overrides)
         key = jax.random.fold_in(root_key, i * realizations + r)
         return critical_load(rod, amplitude, model=model, perturbation=perturbation, mode=mode, n=n, dt=dt,
-                             key=key, bracket=bracket, rtol=rtol, max_iter=max_iter, t1=t1,
-                             sensitivities=("mu", "amplitude"))
+                             key=key, bracket=bracket, rtol=rtol, max_iter=max_iter, t1=t1, method=method,
+                             sensitivities=sensitivities)
 
     idx = jnp.arange(len(mus))
     reals = jnp.arange(realizations)
     run = jax.vmap(jax.vmap(one, (None, 0, None)), (0, None, 0))
     return jax.jit(run)(jnp.asarray(mus), reals, idx)
-

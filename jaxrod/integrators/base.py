@@ -144,14 +144,19 @@ class RunState(eqx.Module):
 class AbstractFixedStep(AbstractIntegrator):
     """A fixed-step one-step scheme. Subclasses define `dt` and `step`.
 
-    The time loop checks the buckling threshold after every step (so `t_buckle` is resolved to
-    one step) and the stick test at every save; a stopped run is frozen, and with
+    The time loop checks the buckling threshold and the stick test after every step (so
+    `t_buckle` and the time a run sticks are resolved to one step); a stopped run is frozen, and with
     `early_exit` the loop ends once the run (every member of a vmapped batch) has stopped.
     The loop is written once, as `start` and `advance` on a [`RunState`][]: `integrate` runs
     it with saves, the sweeps run it in lanes with continuous batching.
     """
 
     dt: eqx.AbstractVar[float]
+
+    def held_is_fixed(self, model: AbstractModel) -> bool:
+        """Whether a state of `model` that passes the stick test is a fixed point of `step`
+        (then a run is frozen at the step it sticks; otherwise at the next save)."""
+        return False
 
     @abc.abstractmethod
     def step(self, model: AbstractModel, q, v, a, t, h):
@@ -182,9 +187,9 @@ class AbstractFixedStep(AbstractIntegrator):
 
     def advance(self, model: AbstractModel, s: RunState, h, m: int, n_save: int,
                 options: RunOptions) -> RunState:
-        """One step of `h` [s] with the stop rules: buckling (amplitude past the threshold)
-        and a non-finite amplitude after every step; at every `m`-th step a save, with the stick
-        test (which freezes the run under a constant load). A finished run is left as it is:
+        """One step of `h` [s] with the stop rules, after every step: buckling (amplitude past
+        the threshold), a non-finite amplitude, and the stick test (which freezes the run under
+        a constant load); at every `m`-th step a save. A finished run is left as it is:
         it takes a step of zero length (an exact identity of the scheme, and much cheaper than
         selecting between old and new arrays), and its bookkeeping is kept."""
         frozen = s.finished(n_save)
@@ -197,8 +202,12 @@ class AbstractFixedStep(AbstractIntegrator):
         k = s.k + 1
         at_save = k == m
         blown = (over & options.stop_on_buckle) | ~jnp.isfinite(amp)
-        stuck = jnp.where(at_save, held, s.stuck & ~blown & ~over)  # a buckled state is not held
-        stopped = blown | (at_save & stuck & _freezes_stuck(model, options))
+        # a held state under a constant load never moves again (for a scheme of which it is a
+        # fixed point): freeze it at the step it is reached (`held` comes from the same
+        # reduction as the amplitude, so the test costs nothing)
+        freeze = held & ~over & _freezes_stuck(model, options) & (at_save | self.held_is_fixed(model))
+        stuck = jnp.where(at_save | freeze, held & ~over, s.stuck & ~blown & ~over)
+        stopped = blown | freeze
         keep = lambda old, new: jnp.where(frozen, old, new)
         return RunState(
             q=q, v=v, a=a, t=t, dissipated=jax.tree_util.tree_map(jnp.add, s.dissipated, lost),
@@ -230,7 +239,13 @@ class AbstractFixedStep(AbstractIntegrator):
             return rec
 
         def interval(s):
-            s = jax.lax.fori_loop(0, m, lambda _, s: self.advance(model, s, h, m, n_save, options), s)
+            step = lambda s: self.advance(model, s, h, m, n_save, options)
+            if options.early_exit:  # leave the interval as soon as the run stops
+                _, s = jax.lax.while_loop(
+                    lambda c: (c[0] < m) & ~c[1].stopped, lambda c: (c[0] + 1, step(c[1])), (0, s)
+                )
+            else:
+                s = jax.lax.fori_loop(0, m, lambda _, s: step(s), s)
             return s, record(s)
 
         rec0 = record(s0)

@@ -38,6 +38,10 @@ class ProjectedVerlet(AbstractFixedStep):
         if not (isinstance(self.dt, (int, float)) and self.dt > 0):
             raise ValueError(f"ProjectedVerlet.dt = {self.dt!r} is invalid: expected a float > 0.")
 
+    def held_is_fixed(self, model):
+        # with the sharp law a held DOF has exactly zero velocity after the prox
+        return model.held_is_fixed and isinstance(self.friction, Coulomb)
+
     def step(self, model, q, v, a, t, h):
         half = 0.5 * h
         v_trial = model.kick(q, v, a, half)

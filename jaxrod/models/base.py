@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import abc
 import math
 
@@ -21,6 +23,11 @@ class AbstractModel(eqx.Module):
     integrator. `acceleration` and the friction bounds are in the model's coordinates with the
     mass scaled out; energies are in the model's energy unit (J for the rod models).
     """
+
+    # whether a state that passes the stick test stays put under the sharp law's projected
+    # step (true for the per-DOF prox; the 3D rod's contact keeps it from being exact)
+    held_is_fixed: ClassVar[bool] = True
+
 
     @abc.abstractmethod
     def acceleration(self, q: Float[Array, "..."], t) -> Float[Array, "..."]:

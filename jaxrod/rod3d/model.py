@@ -12,6 +12,8 @@ effect of α, is in docs/physics.md §7.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -67,6 +69,9 @@ class Rod3D(AbstractModel):
     - `body_force`: extra force per length [N/m], a 3-vector (default 0).
     - `gravity`: include gravity (static, default True).
     """
+
+    held_is_fixed: ClassVar[bool] = False  # a stuck rod can creep at the contact (issue [rod3d])
+
 
     rod: RodChannel
     n_segments: int = eqx.field(static=True)
