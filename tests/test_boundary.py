@@ -186,3 +186,17 @@ def test_single_mode_indicator_calls_a_state_held_by_static_friction_stable():
     same = bd.single_mode_indicator(0.3, k, 2.0, 2.0)
     A, *_ = jr.exact_solution(0.0, 0.3, k, 2.0, 2.0, 10.0 / 2.0)
     assert float(same) == pytest.approx(float(A) / 0.5 - 1.0, rel=1e-12)
+
+
+def test_curve_by_continuation_equals_independent_searches():
+    """Searched along the loads from predictions, or each from the wide bracket: the same roots
+    (to the tolerance), with fewer runs per point along the curve."""
+    dFs = [2.0, 3.0, 4.5, 7.0]
+    kw = dict(model="field", n=32, dt=jr.scene.Scene(ROD, 7.0, kind="field", n=32).step(), rtol=1e-6,
+              sensitivities=())
+    along, _ = bd.boundary_curve(ROD, dFs, **kw)
+    alone, _ = bd.boundary_curve(ROD, dFs, continuation=False, **kw)
+    assert (np.asarray(along.result) == 0).all() and (np.asarray(alone.result) == 0).all()
+    np.testing.assert_allclose(along.root, alone.root, rtol=2e-6)
+    assert np.asarray(along.root).tolist() == sorted(np.asarray(along.root).tolist(), reverse=True)
+    assert np.mean(along.evaluations[1:]) < np.mean(alone.evaluations[1:])

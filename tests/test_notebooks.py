@@ -1,7 +1,6 @@
 """Every notebook runs top to bottom in its small setting (JAXROD_NB_SMALL=1): the quick-start
 notebook in the default suite, the others (75 s together) under `slow`."""
 
-import os
 import pathlib
 
 import pytest

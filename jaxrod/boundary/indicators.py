@@ -45,12 +45,13 @@ def rod_indicator(scene: Scene, t1: float = 0.5):
 
 def crossing_state(scene: Scene, t1: float = 2.0):
     """The state where the run of `scene` stops: `((q, v), buckled)`, at the first step past the
-    buckling threshold, when the rod is stuck (then it stays stuck), or at `t1` [s] — whichever
-    comes first, so that both labels are cheap. Differentiable (forward mode) in every leaf of
-    the scene at a fixed step count."""
+    buckling threshold, when the rod is stuck (then it stays stuck; the reduced models are
+    frozen at the step they stick, the 3D rod at the next of 200 saves), or at `t1` [s] —
+    whichever comes first, so that both labels are cheap. Differentiable (forward mode) in every
+    leaf of the scene at a fixed step count."""
     q0, v0 = scene.initial_state()
     sol = simulate(
-        scene.model(), scene.integrator(), q0, v0, t1, n_save=2,
+        scene.model(), scene.integrator(), q0, v0, t1, n_save=201,
         options=RunOptions(buckle_threshold=scene.threshold, save_state=False), throw=False,
     )
     return (sol.q_final, sol.v_final), sol.buckled

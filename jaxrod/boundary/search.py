@@ -62,12 +62,16 @@ def _scene(rod, dF, v0, kind, n, mode, dt, perturbation, key):
 METHODS = ("departure", "bisection")
 
 
-def _check_method(method, model):
+def _method_of(method, model):
+    """The search method: `"departure"` for the reduced models, label `"bisection"` for the 3D
+    rod (its velocities are not time derivatives of its coordinates, which u needs)."""
+    if method is None:
+        return "bisection" if model == "rod3d" else "departure"
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is invalid: expected one of {METHODS}.")
-    if model == "rod3d":
-        raise ValueError("model = 'rod3d' is not searched here: use jaxrod.experiments.rod3d "
-                         "(label bisection of the 3D rod) or `jaxrod boundary --model rod3d`.")
+    if model == "rod3d" and method == "departure":
+        raise ValueError("method = 'departure' is invalid for the 3D rod: use 'bisection'.")
+    return method
 
 
 def _label(scene_of, t1):
@@ -94,7 +98,7 @@ def critical_velocity(
     key=None,
     bracket=(1e-4, 1.0),
     start=None,
-    method: str = "departure",
+    method: str | None = None,
     rtol: float = 1e-6,
     max_iter: int = 60,
     t1: float = 2.0,
@@ -106,8 +110,9 @@ def critical_velocity(
     `model="mode"` uses the exact single-mode solution (sine perturbation of `mode`, whose
     amplitude is the lateral speed v₀ = R·Ȧ₀) and Newton's method; `"field"`/`"galerkin"` run a
     [`jaxrod.scene.Scene`][] until it sticks or buckles (at most `t1` [s]) and search by `method`
-    (`"departure"`: [`jaxrod.boundary.departure_secant`][], first run at `start` if given, e.g. a
-    prediction; `"bisection"`: on the label). `n`, `dt` are static: pass them when vmapping over
+    (`"departure"`, the default for field and Galerkin: [`jaxrod.boundary.departure_secant`][],
+    first run at `start` if given, e.g. a prediction; `"bisection"` on the label, the default
+    for `"rod3d"`). `n`, `dt` are static: pass them when vmapping over
     dF. Pure and vmappable over `rod` leaves, `dF`, `start` and `key`.
 
     **Returns:** `(RootResult, sensitivities)`: the root in m/s (`nan` unless converged) and
@@ -117,7 +122,7 @@ def critical_velocity(
     dtype = jnp.result_type(float)
     dF = jnp.asarray(dF, dtype)
     key = jax.random.key(0) if key is None else key
-    _check_method(method, model)
+    method = _method_of(method, model)
     rod_of = lambda p: _rod_of(type(rod), p)
     params = _params_of(rod, dF=dF)
 
@@ -156,7 +161,7 @@ def critical_load(
     key=None,
     bracket=(0.05, 100.0),
     start=None,
-    method: str = "departure",
+    method: str | None = None,
     rtol: float = 1e-6,
     max_iter: int = 60,
     t1: float = 2.0,
@@ -177,7 +182,7 @@ def critical_load(
     dtype = jnp.result_type(float)
     amplitude = jnp.asarray(amplitude, dtype)
     key = jax.random.key(0) if key is None else key
-    _check_method(method, model)
+    method = _method_of(method, model)
     rod_of = lambda p: _rod_of(type(rod), p)
     params = _params_of(rod, amplitude=amplitude)
     # Loads span decades and the runs depend on them through λ ∝ √ΔF: search log ΔF.
@@ -260,7 +265,7 @@ def _progress(total, show):
 
 
 def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=(1e-4, 1.0), rtol=1e-6,
-                   max_iter=60, t1=2.0, method="departure", continuation=True, margin=0.02, progress=False,
+                   max_iter=60, t1=2.0, method=None, continuation=True, margin=0.02, progress=False,
                    sensitivities=("mu", "dF")):
     """v₀*(ΔF) for an array of loads.
 
@@ -278,7 +283,7 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
     dFs = np.asarray(dFs, float)
     kw = dict(model=model, mode=mode, rtol=rtol, max_iter=max_iter, t1=t1, method=method,
               sensitivities=sensitivities)
-    if not (continuation and model != "mode" and method == "departure"):
+    if not (continuation and model != "mode" and _method_of(method, model) == "departure"):
         if model != "mode":
             probe = Scene(rod, float(np.max(dFs)), kind=model, n=n, mode=mode, dt=dt)
             n, dt = probe.size(), probe.step() if dt is None else dt
@@ -305,7 +310,7 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
 
 def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, seed=0, model="field",
                         n=None, dt=None, mode=6, bracket=(1e-2, 100.0), rtol=1e-6, max_iter=60, t1=2.0,
-                        method="departure", rod_overrides=None, sensitivities=("mu", "amplitude")):
+                        method=None, rod_overrides=None, sensitivities=("mu", "amplitude")):
     """ΔF*(μ) for an array of friction coefficients and `realizations` random perturbations
     each (keys `fold_in(key(seed), i·realizations + r)`), vmapped.
 

@@ -78,7 +78,10 @@ def build_parser() -> argparse.ArgumentParser:
     bd.add_argument("--n", type=_positive_int, default=None)
     bd.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
     bd.add_argument("--out", default=None, help="folder for boundary.csv and boundary.png")
+    bd.add_argument("--method", choices=["departure", "bisection"], default=None,
+                    help="rod models: departure-rate secant (default) or label bisection (default for rod3d)")
     bd.add_argument("--json", action="store_true")
+    bd.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_rod_options(bd)
     bd.set_defaults(func=_cmd_boundary)
 
@@ -96,6 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
     cl.add_argument("--max-dF", dest="max_dF", type=_finite_float, default=100.0, help="bracket top [N]")
     cl.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
     cl.add_argument("--out", default=None)
+    cl.add_argument("--method", choices=["departure", "bisection"], default=None,
+                    help="rod models: departure-rate secant (default) or label bisection (default for rod3d)")
     cl.add_argument("--json", action="store_true")
     cl.set_defaults(func=_cmd_critical_load)
 

@@ -25,7 +25,8 @@ def _cmd_boundary(args) -> int:
     if np.any(args.dF <= 0):
         _fail("argument --dF: loads above F0_6 must be > 0 N for a boundary to exist.")
     rod = _rod_from_args(args, args.mu)
-    res, sens = bd.boundary_curve(rod, args.dF, model=args.model, n=args.n, bracket=(1e-5, 2.0), rtol=args.rtol)
+    res, sens = bd.boundary_curve(rod, args.dF, model=args.model, n=args.n, bracket=(1e-5, 2.0), rtol=args.rtol,
+                                  method=args.method, progress=not (args.quiet or args.json))
     v = np.asarray(res.root)
     ok = np.asarray(res.result) == 0
     rows = [dict(dF=float(f), v0_star=float(x) if o else None, evaluations=int(e), result=ROOT_RESULTS.messages[int(r)],
@@ -70,7 +71,7 @@ def _cmd_critical_load(args) -> int:
     R = args.realizations
     res, _ = bd.critical_load_curve(args.mu, args.amplitude, perturbation=args.perturbation, realizations=R,
                                     seed=args.seed, model=args.model, n=args.n, rtol=args.rtol,
-                                    bracket=(1e-3, args.max_dF))
+                                    bracket=(1e-3, args.max_dF), method=args.method)
     F = np.asarray(res.root)
     ok = np.asarray(res.result) == 0
     rows = []
