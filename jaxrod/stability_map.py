@@ -77,10 +77,14 @@ def stability_map(
     out: str | None = "results/map",
     progress: bool = True,
     t1: float = 2.0,
+    curve_rtol: float | None = 1e-3,
 ) -> dict:
     """Classify the reference rod straight/buckled over the grid `dF` × `v0` for every μ in
     `mus` (sine mode-`mode` velocity perturbation), fit the boundary, and write `map.png`,
-    `map.csv`, `map.json` and one resumable sweep folder per μ under `out`.
+    `map.csv`, `map.json` and one resumable sweep folder per μ under `out`. For μ > 0 and the
+    field or Galerkin model the boundary is also searched directly at every load of the grid
+    ([`jaxrod.boundary.boundary_curve`][] at the map's n and dt, to `curve_rtol`; `None`: not)
+    and drawn over the grid.
 
     **Returns:** the summary (per μ: boundary points, fitted exponent ± standard error, the
     largest stable ΔF/F⁰_cr seen, counts), also written to `map.json`.
@@ -95,6 +99,8 @@ def stability_map(
         res = sweep(spec, {"dF": dF, "amplitude": v0}, path=path, progress=progress)
         results[mu] = res
         summary["maps"][f"{mu:g}"] = _summarise(res, dF, v0, float(mu))
+        if curve_rtol is not None and mu > 0 and model in ("field", "galerkin"):
+            summary["maps"][f"{mu:g}"].update(_searched(res, dF, float(mu), model, mode, t1, curve_rtol, progress))
     summary["n"] = results[mus[0]].meta["n"]
     summary["dt"] = results[mus[0]].meta["dt"]
     if out is not None:
@@ -134,6 +140,21 @@ def _summarise(res: SweepResult, dF, v0, mu) -> dict:
         "buckles_for_every_dF_gt_0": buckles_every_positive,
         "F0cr_continuous": F0cr,
     }
+
+
+def _searched(res: SweepResult, dF, mu, model, mode, t1, rtol, progress) -> dict:
+    """The boundary searched at every load of the map, at the map's resolution."""
+    from .boundary import boundary_curve
+
+    rod = RodChannel.reference(mu=mu)
+    r, _ = boundary_curve(rod, dF, model=model, n=res.meta["n"], dt=res.meta["dt"], mode=mode, bracket=(1e-5, 2.0),
+                          rtol=rtol, t1=t1, sensitivities=(), progress=progress)
+    ok = np.asarray(r.result) == 0
+    v = np.asarray(r.root)
+    p, se, _ = fit_power_law(dF[ok], v[ok]) if ok.sum() >= 2 else (math.nan, math.nan, math.nan)
+    return {"curve_rtol": rtol, "curve_v0": [float(x) if o else None for x, o in zip(v, ok)],
+            "curve_evaluations": np.asarray(r.evaluations).tolist(), "curve_exponent": p,
+            "curve_exponent_stderr": se}
 
 
 def _map_rows(results: dict) -> list[dict]:
@@ -176,6 +197,10 @@ def plot_maps(results: dict, summary: dict, path: str) -> None:
                 ax.plot(fine, 1e3 * fit, "-", color="tab:blue", lw=1.5,
                         label=f"fitted boundary: v0 ∝ ΔF^({s['exponent']:.3f} ± {s['exponent_stderr']:.3f})")
                 ax.plot(s["boundary_dF"], 1e3 * np.asarray(s["boundary_v0"]), "o", color="tab:blue", ms=3)
+            if "curve_v0" in s:
+                cv = np.array([np.nan if x is None else x for x in s["curve_v0"]])
+                ax.plot(dF, 1e3 * cv, "-", color="tab:purple", lw=2, alpha=0.8,
+                        label=f"searched boundary (rtol {s['curve_rtol']:g}): v0* ∝ ΔF^({s['curve_exponent']:.3f})")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlim(dF.min() / 1.15, dF.max() * 1.15)

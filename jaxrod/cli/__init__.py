@@ -68,6 +68,8 @@ def build_parser() -> argparse.ArgumentParser:
     mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
     mp.add_argument("--out", default="results/map", help="output folder (default results/map)")
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
+    mp.add_argument("--no-curve", dest="no_curve", action="store_true",
+                    help="do not search the boundary at every load (drawn over the grid, rtol 1e-3)")
     mp.set_defaults(func=_cmd_map)
 
     bd = sub.add_parser("boundary", help="critical sine velocity v0*(dF) by root search")

@@ -121,11 +121,15 @@ def _range_spec(text: str):
     return np.geomspace(lo, hi, n) if lo > 0 else np.linspace(lo, hi, n)
 
 
+RTOL_MIN = 1e-13  # 450 ulp of float64: a bracket cannot be resolved much finer
+
+
 def _rtol(text: str) -> float:
-    """A relative tolerance in (0, 0.5)."""
+    """A relative tolerance in [1e-13, 0.5) (float64 resolves about 2.2e-16)."""
     x = _finite_float(text)
-    if not 0 < x < 0.5:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a relative tolerance in (0, 0.5)")
+    if not RTOL_MIN <= x < 0.5:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a relative tolerance in [{RTOL_MIN:g}, 0.5) (float64 resolves about 2.2e-16)")
     return x
 
 

@@ -25,7 +25,7 @@ def _cmd_map(args) -> int:
           f"({jax.devices()[0].platform})")
     try:
         s = stability_map(mus, args.dF, args.v0, args.model, args.n, 6, args.out,
-                          progress=not args.quiet, t1=args.t1)
+                          progress=not args.quiet, t1=args.t1, curve_rtol=None if args.no_curve else 1e-3)
     except ValueError as err:
         _fail(str(err))
     print(f"n = {s['n']}, dt = {s['dt']:.3e} s; wrote {args.out}/map.png, map.csv, map.json")
@@ -38,6 +38,11 @@ def _cmd_map(args) -> int:
             if math.isfinite(m["exponent"]):
                 print(f"    boundary v0 ~ dF^p with p = {m['exponent']:.3f} +/- {m['exponent_stderr']:.3f} "
                       f"(theory -1/2), from {len(m['boundary_dF'])} columns")
+            if "curve_v0" in m:
+                found = sum(x is not None for x in m["curve_v0"])
+                print(f"    searched boundary at {found} of {len(m['curve_v0'])} loads (rtol {m['curve_rtol']:g}, "
+                      f"{sum(m['curve_evaluations'])} runs): p = {m['curve_exponent']:.3f} +/- "
+                      f"{m['curve_exponent_stderr']:.3f}")
             else:
                 print("    no boundary crossing inside the grid: widen --v0 or --dF")
         largest = m["largest_stable_dF_over_F0cr"]
