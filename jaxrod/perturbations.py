@@ -2,9 +2,19 @@
 
 All are equinox Modules with array leaves (amplitudes, JAX keys), so a batch of them is a
 `vmap` away. Velocities are lateral speeds [m/s] and displacements lateral [m]: the model
-divides by the clearance R to get θ̇ and θ. Random fields are drawn independently at every
-*sample point* of the model (the field model's nodes; the Galerkin model's quadrature points,
-then projected onto its modes).
+divides by the clearance R to get θ̇ and θ.
+
+**Random fields belong to the scene, not to the model.** The reference paper draws them on the
+nodes of its 500-segment rod: "a lateral velocity uniform in [−15, 15] mm/s on each node", or
+small random lateral forces on all nodes for 1 ms. jaxrod draws them the same way, on `grid`
+segments of the rod (default 500: the interior nodes s_j = jL/500), and gives every model the
+sine series of that nodal field, r(s) = Σ_m c_m sin(mπs/L), c_m = (2/grid) Σ_j r_j sin(mπj/grid),
+truncated to the modes the model resolves (m ≤ its number of sample points). The same key
+therefore gives the same modal amplitudes c_m to a field model of any n, a Galerkin model, the
+single mode (c_m itself) and the 3D rod, and a finer model resolves more of the same field
+instead of receiving new, weaker noise (white noise on a model's own n nodes puts ∝ 1/n of
+its energy into each mode, so results drifted with n). `grid=None` restores that per-node
+noise.
 """
 
 from __future__ import annotations
@@ -28,6 +38,8 @@ __all__ = [
     "RandomShape",
     "UserState",
     "initial_state",
+    "scene_noise",
+    "GRID",
 ]
 
 
@@ -44,6 +56,25 @@ def _points(model) -> Float[Array, " n"]:
             f"{type(model).__name__}. For SingleMode use jaxrod.perturbations.project_to_mode."
         )
     return model.sample_points()
+
+
+GRID = 500  # segments of the scene's noise grid: the reference paper's rod
+
+
+def scene_noise(key, amplitude, s, L, grid: int | None = GRID, modes: int | None = None):
+    """A random field uniform in ±`amplitude` on the interior nodes of `grid` equal segments of a
+    rod of length `L` [m], evaluated at the points `s` [m] through its sine series truncated to
+    min(grid − 1, `modes`) modes (`modes` default: len(s), what interior points resolve;
+    `grid=None`: drawn independently at every point of `s`)."""
+    if grid is None:
+        return jax.random.uniform(key, s.shape, s.dtype, -1.0, 1.0) * amplitude
+    if not (isinstance(grid, int) and grid >= 2):
+        raise ValueError(f"grid = {grid!r} is invalid: expected an int >= 2 (segments) or None.")
+    j = jnp.arange(1, grid, dtype=s.dtype)
+    r = jax.random.uniform(key, (grid - 1,), s.dtype, -1.0, 1.0) * amplitude
+    m = jnp.arange(1, min(grid - 1, s.shape[-1] if modes is None else modes) + 1, dtype=s.dtype)
+    c = (2.0 / grid) * (jnp.sin(jnp.pi * m[:, None] * j[None, :] / grid) @ r)
+    return jnp.sin(jnp.pi * s[:, None] * m[None, :] / L) @ c
 
 
 def _to_coords(model, theta_at_points):
@@ -82,36 +113,38 @@ class SineVelocity(AbstractPerturbation):
 
 
 class RandomVelocity(AbstractPerturbation):
-    """A lateral velocity drawn uniformly in [−`amplitude`, `amplitude`] [m/s] at every
-    sample point, independently, from `key`; the rod straight."""
+    """A lateral velocity drawn uniformly in [−`amplitude`, `amplitude`] [m/s] on every node of
+    the scene's noise grid (`grid` segments, static; see the module) from `key`; the rod
+    straight."""
 
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
+    grid: int | None = eqx.field(static=True, default=GRID)
 
     def fields(self, model):
         s = _points(model)
-        v = jax.random.uniform(self.key, s.shape, s.dtype, -1.0, 1.0) * self.amplitude
-        return jnp.zeros_like(s), v
+        return jnp.zeros_like(s), scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid)
 
 
 class RandomShape(AbstractPerturbation):
-    """A lateral displacement drawn uniformly in [−`amplitude`, `amplitude`] [m] at every
-    sample point from `key`, released from rest."""
+    """A lateral displacement drawn uniformly in [−`amplitude`, `amplitude`] [m] on every node
+    of the scene's noise grid (`grid` segments, static) from `key`, released from rest."""
 
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
+    grid: int | None = eqx.field(static=True, default=GRID)
 
     def fields(self, model):
         s = _points(model)
-        y = jax.random.uniform(self.key, s.shape, s.dtype, -1.0, 1.0) * self.amplitude
-        return y, jnp.zeros_like(s)
+        return scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid), jnp.zeros_like(s)
 
 
 class RandomForce(AbstractPerturbation):
     """The reference paper's random position perturbation: lateral forces per unit length
-    drawn uniformly in [−`amplitude`, `amplitude`] [N/m] at every sample point act on the
-    loaded, straight rod (friction included) for `duration` [s] (default 1 ms); the rod is
-    then released from rest in the shape they produced.
+    drawn uniformly in [−`amplitude`, `amplitude`] [N/m] on every node of the scene's noise grid
+    (`grid` segments, static) act on the loaded, straight rod (friction included) for
+    `duration` [s] (default 1 ms); the rod is then released from rest in the shape they
+    produced.
 
     The forcing phase is integrated with the run's fixed-step integrator (required).
     """
@@ -119,11 +152,11 @@ class RandomForce(AbstractPerturbation):
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
     duration: Float[Array, ""] = eqx.field(converter=_f, default=1e-3)
+    grid: int | None = eqx.field(static=True, default=GRID)
 
     def fields(self, model):
         s = _points(model)
-        force = jax.random.uniform(self.key, s.shape, s.dtype, -1.0, 1.0) * self.amplitude
-        return force, jnp.zeros_like(s)
+        return scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid), jnp.zeros_like(s)
 
     def initial_state(self, model, integrator=None):
         from .integrators.base import AbstractFixedStep

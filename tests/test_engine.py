@@ -10,7 +10,10 @@ import jaxrod as jr
 from jaxrod.scene import Scene
 
 ROD = jr.RodChannel.reference(0.3)
-KINDS = [("mode", None, 0.2), ("galerkin", 8, 0.2), ("field", 24, 0.2), ("rod3d", 10, 0.03)]
+# the 3D rod's case (40 s of compilation) is `slow`: test_sweep's 3D test checks members against
+# single runs of the same engine in the default suite
+KINDS = [("mode", None, 0.2), ("galerkin", 8, 0.2), ("field", 24, 0.2),
+         pytest.param("rod3d", 10, 0.03, marks=pytest.mark.slow)]
 
 
 @pytest.mark.parametrize("kind,n,t1", KINDS)

@@ -39,12 +39,12 @@ def _rod_of(rod_type, p: dict):
     return rod_type(*(p[f] for f in _ROD_KEYS), p["mu"] + p["mu_excess"], p["mu"])
 
 
-def _resolution(rod, dF, model, n, mode, dt):
+def _resolution(rod, dF, model, n, mode, dt, perturbation="sine"):
     """Static n and dt from concrete values (the largest load of the search)."""
     if n is not None and dt is not None:
         return n, dt
     try:
-        probe = Scene(rod, dF, kind=model, n=n, mode=mode, dt=dt)
+        probe = Scene(rod, dF, make_perturbation(perturbation, 1.0, mode), kind=model, n=n, mode=mode, dt=dt)
         n = probe.size()
         return n, probe.step()
     except (ValueError, jax.errors.ConcretizationTypeError):
@@ -74,6 +74,13 @@ def _method_of(method, model):
     return method
 
 
+def _named(res):
+    """A search that did not converge names no root: NaN beside its result code."""
+    from .roots import ROOT_RESULTS
+
+    return eqx.tree_at(lambda r: r.root, res, jnp.where(res.result == ROOT_RESULTS.converged, res.root, jnp.nan))
+
+
 def _label(scene_of, t1):
     return lambda x: crossing_state(scene_of(x), t1)[1]
 
@@ -81,7 +88,7 @@ def _label(scene_of, t1):
 def _search(scene_of, lo, hi, lam, method, start, rtol, max_iter, t1, geometric):
     """The root of the label of `scene_of(x)` in [lo, hi] by `method`."""
     if method == "bisection":
-        return bisection(_label(scene_of, t1), lo, hi, rtol, max_iter, geometric=geometric)
+        return _named(bisection(_label(scene_of, t1), lo, hi, rtol, max_iter, geometric=geometric))
     return departure_secant(lambda x: departure_rate(scene_of, x, t1), lo, hi, lam, start=start,
                             rtol=rtol, max_iter=max_iter, geometric=geometric)
 
@@ -133,12 +140,12 @@ def critical_velocity(
             m = SingleMode.from_rod(r, mode, F=F)
             return single_mode_indicator(v0 / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
 
-        res = safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter)
+        res = _named(safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter))
         sub = {k: params[k] for k in sensitivities}
         sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub) if sub else {}
         return res, sens
 
-    n, dt = _resolution(rod, dF, model, n, mode, dt)
+    n, dt = _resolution(rod, dF, model, n, mode, dt, perturbation)
     scene_of2 = lambda v0, p: _scene(rod_of(p), p["dF"], v0, model, n, mode, dt, perturbation, key)
     lam = theory.max_growth_rate(rod, theory.reference_load(rod) + dF)
     res = _search(lambda v: scene_of2(v, params), bracket[0], bracket[1], lam, method, start, rtol,
@@ -198,12 +205,13 @@ def critical_load(
             m = SingleMode.from_rod(r, mode, F=F)
             return single_mode_indicator(p["amplitude"] / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
 
-        res = to_load(safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, rtol, max_iter, geometric=False))
+        res = _named(to_load(safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, rtol, max_iter,
+                                                geometric=False)))
         sub = {k: params[k] for k in sensitivities}
         sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub) if sub else {}
         return res, sens
 
-    n, dt = _resolution(rod, bracket[1], model, n, mode, dt)
+    n, dt = _resolution(rod, bracket[1], model, n, mode, dt, perturbation)
     scene_of2 = lambda dF, p: _scene(rod_of(p), dF, p["amplitude"], model, n, mode, dt, perturbation, key)
     F0 = theory.reference_load(rod)
     lam = lambda y: theory.max_growth_rate(rod, F0 + jnp.exp(y))
@@ -324,7 +332,8 @@ def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, 
     overrides = dict(rod_overrides or {})
     base = RodChannel.reference(mu=float(mus.max()), **overrides)
     if model != "mode":
-        probe = Scene(base, float(bracket[1]), kind=model, n=n, mode=mode, dt=dt)
+        probe = Scene(base, float(bracket[1]), make_perturbation(perturbation, 1.0, mode), kind=model, n=n,
+                      mode=mode, dt=dt)
         n = probe.size()
         dt = probe.step() if dt is None else dt
     root_key = jax.random.key(seed)
