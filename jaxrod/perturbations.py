@@ -73,8 +73,10 @@ def scene_noise(key, amplitude, s, L, grid: int | None = GRID, modes: int | None
     j = jnp.arange(1, grid, dtype=s.dtype)
     r = jax.random.uniform(key, (grid - 1,), s.dtype, -1.0, 1.0) * amplitude
     m = jnp.arange(1, min(grid - 1, s.shape[-1] if modes is None else modes) + 1, dtype=s.dtype)
-    c = (2.0 / grid) * (jnp.sin(jnp.pi * m[:, None] * j[None, :] / grid) @ r)
-    return jnp.sin(jnp.pi * s[:, None] * m[None, :] / L) @ c
+    # sums rather than matrix products: the same reduction order alone and under vmap, so a
+    # sweep member equals its single run bit for bit
+    c = (2.0 / grid) * jnp.sum(jnp.sin(jnp.pi * m[:, None] * j[None, :] / grid) * r[None, :], axis=-1)
+    return jnp.sum(jnp.sin(jnp.pi * s[:, None] * m[None, :] / L) * c[None, :], axis=-1)
 
 
 def _to_coords(model, theta_at_points):

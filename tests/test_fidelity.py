@@ -8,7 +8,7 @@ import pytest
 
 import jaxrod as jr
 from jaxrod import boundary as bd
-from jaxrod.perturbations import RandomForce, RandomShape, RandomVelocity, project_to_mode, scene_noise
+from jaxrod.perturbations import RandomShape, RandomVelocity, project_to_mode, scene_noise
 
 ROD = jr.RodChannel.reference(mu=0.3)
 KEY = jax.random.key(7)

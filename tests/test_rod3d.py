@@ -133,6 +133,7 @@ def test_bad_arguments_name_the_argument():
         Rod3D(rod, 10, control="displacement", speed=float("nan"))
 
 
+@pytest.mark.slow  # 23-30 s of 3D compilation; the default suite keeps a quicker check
 def test_a_compressed_rod_inside_the_friction_cone_holds_with_centre_line_friction():
     """Friction at the centre line (sliding only): a rod pre-compressed past F⁰₆ + 20 N with a
     mode-12 offset whose net elastic + gravity force is 44 % of μN (field theory: stuck) does not

@@ -7,6 +7,7 @@ import pytest
 from jaxrod.cli import main
 
 
+@pytest.mark.slow  # 23-30 s of 3D compilation; the default suite keeps a quicker check
 def test_simulate_rod3d_displacement_control_reports_the_peak_reaction(capsys):
     assert main(["simulate", "--model", "rod3d", "--control", "displacement", "--speed", "2e-3",
                  "--n", "8", "--t1", "0.05", "--n-save", "51", "--amplitude", "0.01", "--json"]) == 0

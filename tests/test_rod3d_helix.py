@@ -1,6 +1,7 @@
 """Post-buckling of the 3D rod: the helix measures on an exact helix, and a frictionless rod
 pushed past buckling going over the top of the channel inside the helical-onset band."""
 
+import pytest
 import math
 
 import numpy as np
@@ -36,6 +37,7 @@ def test_helix_measures_recover_an_exact_helix():
     assert not hs["helical"] and hs["pitch"] == np.inf and not hs["over_top"]
 
 
+@pytest.mark.slow  # 23-30 s of 3D compilation; the default suite keeps a quicker check
 def test_frictionless_rod_goes_over_the_top_inside_the_helical_band():
     """Pushed at 4 mm/s (20 segments, damping 50 1/s), the frictionless rod first reaches the top
     of the channel at an end load between Chen's 2√2·√(EIw/R) and Mitchell's 4√2·√(EIw/R)

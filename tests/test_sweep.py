@@ -193,9 +193,11 @@ def test_rod3d_sweep_matches_single_runs_and_flags_bad_members():
         sweep(SweepSpec(model="rod3d", n=12, dt=1.0), {"dF": [1.0]}, progress=False)
 
 
-def test_pool_member_equals_its_single_run_bit_for_bit():
-    """Continuous batching: each member of a pooled sweep is exactly the `simulate` run of its
-    scene (same steps, same stop), whatever lane it ran in."""
+def test_pool_member_equals_its_single_run():
+    """Continuous batching: each member of a pooled sweep is the `simulate` run of its scene —
+    the same steps and the same stop, whatever lane it ran in. Amplitudes agree to 1e-13: the
+    random field's synthesis from the scene's noise grid is a sum whose order XLA may change
+    under vmap; labels, stop times and step counts are compared exactly."""
     from jaxrod.scene import Scene, make_perturbation
 
     spec = SweepSpec(model="field", n=24, perturbation="random-velocity", t1=0.3)
@@ -212,8 +214,8 @@ def test_pool_member_equals_its_single_run_bit_for_bit():
         o = {k: v[i] for k, v in res.outputs.items()}
         assert o["buckled"] == bool(sol.buckled) and o["stuck"] == bool(sol.stuck[-1])
         assert o["t_buckle"] == float(sol.t_buckle) and o["t_stop"] == float(sol.t_stop)
-        assert o["max_theta"] == float(jnp.max(sol.amplitude))
-        assert o["final_theta"] == float(sol.amplitude[-1])
+        assert o["max_theta"] == pytest.approx(float(jnp.max(sol.amplitude)), rel=1e-13)
+        assert o["final_theta"] == pytest.approx(float(sol.amplitude[-1]), rel=1e-13)
         assert o["steps"] == int(sol.n_steps)
         assert o["dominant_mode"] == int(jr.modal.dominant_mode(sol.q_final))
 
