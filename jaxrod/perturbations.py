@@ -27,8 +27,6 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
 
 from .models.base import AbstractModel
-from .models.field import FieldModel
-from .models.galerkin import GalerkinModel
 
 __all__ = [
     "AbstractPerturbation",
@@ -47,15 +45,6 @@ def _f(x):
     if isinstance(x, (int, float)):
         return jnp.asarray(x, dtype=jnp.result_type(float))
     return jnp.asarray(x)
-
-
-def _points(model) -> Float[Array, " n"]:
-    if not isinstance(model, (FieldModel, GalerkinModel)):
-        raise TypeError(
-            f"perturbations need a model with sample points (FieldModel, GalerkinModel); got "
-            f"{type(model).__name__}. For SingleMode use jaxrod.perturbations.project_to_mode."
-        )
-    return model.sample_points()
 
 
 GRID = 500  # segments of the scene's noise grid: the reference paper's rod
@@ -79,12 +68,6 @@ def scene_noise(key, amplitude, s, L, grid: int | None = GRID, modes: int | None
     return jnp.sum(jnp.sin(jnp.pi * s[:, None] * m[None, :] / L) * c[None, :], axis=-1)
 
 
-def _to_coords(model, theta_at_points):
-    if isinstance(model, GalerkinModel):
-        return model.project(theta_at_points)
-    return theta_at_points
-
-
 class AbstractPerturbation(eqx.Module):
     """Maps a model to its initial state (θ₀, θ̇₀) in the model's coordinates."""
 
@@ -96,7 +79,7 @@ class AbstractPerturbation(eqx.Module):
         """(q₀, v₀) in the model's coordinates."""
         y, v = self.fields(model)
         R = model.rod.R
-        return _to_coords(model, y / R), _to_coords(model, v / R)
+        return model.from_samples(y / R), model.from_samples(v / R)
 
 
 class SineVelocity(AbstractPerturbation):
@@ -109,7 +92,7 @@ class SineVelocity(AbstractPerturbation):
     mode: Float[Array, ""] = eqx.field(converter=_f, default=6.0)
 
     def fields(self, model):
-        s = _points(model)
+        s = model.sample_points()
         v = self.v0 * jnp.sin(self.mode * jnp.pi * s / model.rod.L)
         return jnp.zeros_like(s), v
 
@@ -124,7 +107,7 @@ class RandomVelocity(AbstractPerturbation):
     grid: int | None = eqx.field(static=True, default=GRID)
 
     def fields(self, model):
-        s = _points(model)
+        s = model.sample_points()
         return jnp.zeros_like(s), scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid)
 
 
@@ -137,7 +120,7 @@ class RandomShape(AbstractPerturbation):
     grid: int | None = eqx.field(static=True, default=GRID)
 
     def fields(self, model):
-        s = _points(model)
+        s = model.sample_points()
         return scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid), jnp.zeros_like(s)
 
 
@@ -157,7 +140,7 @@ class RandomForce(AbstractPerturbation):
     grid: int | None = eqx.field(static=True, default=GRID)
 
     def fields(self, model):
-        s = _points(model)
+        s = model.sample_points()
         return scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid), jnp.zeros_like(s)
 
     def initial_state(self, model, integrator=None):
@@ -169,7 +152,7 @@ class RandomForce(AbstractPerturbation):
                 f"integrate its forcing phase; got {type(integrator).__name__}."
             )
         force, _ = self.fields(model)
-        extra = _to_coords(model, force / (model.rod.rho * model.rod.R))
+        extra = model.from_samples(force / (model.rod.rho * model.rod.R))
         forced = _Forced(model, extra)
         q = jnp.zeros_like(extra)
         v = jnp.zeros_like(extra)

@@ -140,7 +140,6 @@ def test_worst_case_perturbation_beats_the_sine_field():
     assert r["norm_worst"] <= r["random_norms"].min() + 1e-12  # multi-start keeps the best
     assert r["indicator"](1.01 * r["norm_worst"]) > 0  # 1 % above: buckles
     assert r["indicator"](0.99 * r["norm_worst"]) <= 0  # 1 % below: does not
-    assert abs(float(np.sum(r["spectrum"])) - 1) < 1e-9
     assert r["single_mode_prediction"] > 0 and r["single_mode_prediction_mode"] >= 6
 
 

@@ -28,7 +28,6 @@ class AbstractModel(eqx.Module):
     # step (true for the per-DOF prox; the 3D rod's contact keeps it from being exact)
     held_is_fixed: ClassVar[bool] = True
 
-
     @abc.abstractmethod
     def acceleration(self, q: Float[Array, "..."], t) -> Float[Array, "..."]:
         """The conservative (elastic + load + gravity) acceleration −M⁻¹∇V at `q`, time `t`."""
@@ -49,6 +48,20 @@ class AbstractModel(eqx.Module):
     def max_frequency(self) -> Float[Array, ""]:
         """The highest angular frequency of the conservative part [rad/s]; a fixed-step
         explicit integrator is stable for `dt · max_frequency < 2`."""
+
+    # -- where a perturbation field is sampled (rod models along s) -------------------------
+
+    def sample_points(self) -> Float[Array, " n"]:
+        """Arc-length positions s [m] at which a lateral field is given to this model."""
+        raise TypeError(
+            f"{type(self).__name__} takes no field perturbation: it has no sample points (for "
+            "SingleMode use jaxrod.perturbations.project_to_mode)."
+        )
+
+    def from_samples(self, values: Float[Array, " n"]) -> Float[Array, "..."]:
+        """The model's coordinates of a field given at `sample_points` (identity for nodal
+        models; a projection for modal ones)."""
+        return values
 
     # -- defaults that models with per-DOF friction and a constant load inherit ----------------
 

@@ -95,6 +95,9 @@ class GalerkinModel(AbstractModel):
         j = jnp.arange(self.n_quad, dtype=self.rod.L.dtype) + 0.5
         return j * self.rod.L / self.n_quad
 
+    def from_samples(self, values):
+        return self.project(values)
+
     def project(self, values: Float[Array, " Q"]) -> Float[Array, " n_modes"]:
         """Modal amplitudes of a field given at the quadrature points."""
         return (2.0 / self.n_quad) * (values @ self._phi())
