@@ -72,7 +72,8 @@ def test_invalid_bracket_is_reported():
     assert int(r.result) == bd.ROOT_RESULTS.invalid_bracket
 
 
-@pytest.mark.parametrize("model,dF", [("field", 2.0), ("field", 12.0), ("galerkin", 5.0)])
+@pytest.mark.parametrize("model,dF", [("field", 2.0), pytest.param("field", 12.0, marks=pytest.mark.slow),
+                                      ("galerkin", 5.0)])
 def test_departure_root_is_the_label_boundary_in_few_runs(model, dF):
     """The departure search against label bisection of the same runs (an independent use of the
     label only), and its IFT sensitivity against a finite difference of two root solves."""
@@ -101,6 +102,7 @@ def test_departure_root_is_the_label_boundary_in_few_runs(model, dF):
     assert float(sens["mu"]) == pytest.approx(fd, rel=2e-3)
 
 
+@pytest.mark.slow  # 11 s; tests/test_single_mode.py checks the smooth law against the sharp one by default
 def test_smooth_law_continuation_converges_to_the_sharp_root():
     k, f = -4.0, 2.0
     vc = float(th.velocity_intercept(k, f))
