@@ -28,7 +28,7 @@ def e5(out, quick, progress):
     rod0 = RodChannel.reference()
     n = s["n"] or default_nodes(rod0, s["max_dF"])
     fig, axes = subplots(1, 2, figsize=(12, 4.8))
-    res = {"model": "field", "n": n}
+    res = {"model": "field", "n": n}  # the sine default; each perturbation records its own n
     rows = []
     for kind, amp in (("random-velocity", 15e-3), ("random-position", 2.0)):
         # the scene's default n for the perturbation (499 for a random velocity: every mode of

@@ -57,7 +57,7 @@ if "e5" in r:
     for kind in ("random-velocity", "random-position"):
         e = e5[kind]
         m = ", ".join(f"{a:.1f}±{b:.1f}" for a, b in zip(e["dominant_mode_mean"], e["dominant_mode_std"]))
-        rows.append((f"E5 dominant mode vs μ (0.05 → 1), {kind}", "rises with μ; ≥ 6", m, f"field, n = {e5['n']}",
+        rows.append((f"E5 dominant mode vs μ (0.05 → 1), {kind}", "rises with μ; ≥ 6", m, f"field, n = {e.get('n', e5['n'])}",
                      "jaxrod reproduce e5"))
 if "e1" in r:
     e1 = r["e1"]
