@@ -88,8 +88,10 @@ n = 24 if SMALL else None
 sine, _ = jr.boundary.critical_load_curve(mus, 15e-3, perturbation="sine", n=n, bracket=(1e-3, 300.0))
 rand, _ = jr.boundary.critical_load_curve(mus, 15e-3, perturbation="random-velocity", realizations=2 if SMALL else 8,
                                           n=n, bracket=(1e-3, 300.0))
+# a search whose bracket holds no root returns NaN beside its result code: average the others
+print("searches without a root in the bracket:", int((np.asarray(rand.result) != 0).sum()), "of", rand.result.size)
 F_sine = np.asarray(sine.root)[:, 0]
-F_rand = np.asarray(rand.root).mean(axis=1)
+F_rand = np.nanmean(np.asarray(rand.root), axis=1)
 p1 = jr.stability_map.fit_power_law(mus, F_sine)[0]
 p2 = jr.stability_map.fit_power_law(mus, F_rand)[0]
 print(f"sine: dF* ~ mu^{p1:.2f} (single-mode theory 2); random velocity: mu^{p2:.2f}")
