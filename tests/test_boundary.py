@@ -133,6 +133,7 @@ def test_cli_boundary_and_critical_load_json(capsys):
     assert {"mu", "dF_star", "evaluations", "result", "dF_star_std"} <= set(rows[0])
 
 
+@pytest.mark.slow  # 14 s of optax iterations through the field model
 def test_worst_case_perturbation_beats_the_sine_field():
     from jaxrod.worst_case import worst_case_velocity
 

@@ -31,6 +31,7 @@ def test_so3_roundtrip_and_finite_gradients_at_identity():
     np.testing.assert_allclose(g, 2 * phi, atol=1e-9)
 
 
+@pytest.mark.slow  # 17 s of 3D compilation; the static-friction 3D check stays in the default suite
 def test_static_sag_of_a_simply_supported_rod_matches_beam_theory():
     """Midspan sag 5wL⁴/(384EI) (+ shear wL²/(8κGA)) of a pinned–roller rod under its weight,
     reached by damped dynamics."""
