@@ -83,7 +83,7 @@ def wall_time(rows):
     bare, t_bare = best_of(lambda: bd.boundary_curve(ROD, dFs, rtol=1e-3, sensitivities=())[0].root)
     _, t_sens = best_of(lambda: bd.boundary_curve(ROD, dFs, rtol=1e-3)[0].root)
     args = dict(mus=(0.3,), dF=np.geomspace(0.5, 64.0, 20), v0=np.geomspace(1e-3, 0.2, 24), out=None,
-                progress=False)
+                progress=False, curve_rtol=None)  # the grid alone
     _, t_map = best_of(lambda: stability_map(**args))
     rows += [dict(part="wall", what="boundary curve, 20 loads, rtol 1e-3", seconds=t_bare),
              dict(part="wall", what="boundary curve + sensitivities (mu, dF)", seconds=t_sens),

@@ -222,6 +222,13 @@ def critical_load(
     return res, sens
 
 
+@eqx.filter_jit
+def _velocity_search(rod, dF, lo, hi, start, **static):
+    """One compiled `critical_velocity` per set of static settings, reused by every curve (the
+    rod and the numbers are traced)."""
+    return critical_velocity(rod, dF, bracket=(lo, hi), start=start, **static)
+
+
 def _predict(xs, roots, refs, x):
     """A root at `x` from earlier roots: the ratio root/ref (ref a theory curve of the same
     shape) extrapolated linearly in log x from the last two, or kept from the last one."""
@@ -298,14 +305,10 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
         fn = lambda dF: critical_velocity(rod, dF, bracket=bracket, n=n, dt=dt, **kw)
         return jax.jit(jax.vmap(fn))(jnp.asarray(dFs))
 
-    compiled = {}
-
     def search(dF, lo, hi, start):
-        res = _resolution(rod, dF, model, n, mode, dt)
-        if res not in compiled:
-            compiled[res] = jax.jit(lambda dF, lo, hi, start: critical_velocity(
-                rod, dF, bracket=(lo, hi), start=start, n=res[0], dt=res[1], **kw))
-        return compiled[res](dF, lo, hi, start)
+        n_, dt_ = _resolution(rod, dF, model, n, mode, dt)
+        f = lambda x: jnp.asarray(x, jnp.result_type(float))  # arrays: traced, not static
+        return _velocity_search(rod, f(dF), f(lo), f(hi), f(start), n=n_, dt=dt_, **kw)
 
     F0 = float(theory.reference_load(rod))
 
