@@ -68,6 +68,11 @@ def scene_noise(key, amplitude, s, L, grid: int | None = GRID, modes: int | None
     return jnp.sum(jnp.sin(jnp.pi * s[:, None] * m[None, :] / L) * c[None, :], axis=-1)
 
 
+def _noise(p, model, s):
+    """The scene noise of a random perturbation `p` at `model`'s sample points `s`."""
+    return scene_noise(p.key, p.amplitude, s, model.rod.L, p.grid, modes=model.resolved_modes)
+
+
 class AbstractPerturbation(eqx.Module):
     """Maps a model to its initial state (θ₀, θ̇₀) in the model's coordinates."""
 
@@ -76,10 +81,8 @@ class AbstractPerturbation(eqx.Module):
         """Lateral displacement [m] and velocity [m/s] at the model's sample points."""
 
     def initial_state(self, model: AbstractModel, integrator=None):
-        """(q₀, v₀) in the model's coordinates."""
-        y, v = self.fields(model)
-        R = model.rod.R
-        return model.from_samples(y / R), model.from_samples(v / R)
+        """(q₀, v₀) in the model's coordinates (`model.perturbed_state` of the fields)."""
+        return model.perturbed_state(*self.fields(model))
 
 
 class SineVelocity(AbstractPerturbation):
@@ -108,7 +111,7 @@ class RandomVelocity(AbstractPerturbation):
 
     def fields(self, model):
         s = model.sample_points()
-        return jnp.zeros_like(s), scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid)
+        return jnp.zeros_like(s), _noise(self, model, s)
 
 
 class RandomShape(AbstractPerturbation):
@@ -121,7 +124,7 @@ class RandomShape(AbstractPerturbation):
 
     def fields(self, model):
         s = model.sample_points()
-        return scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid), jnp.zeros_like(s)
+        return _noise(self, model, s), jnp.zeros_like(s)
 
 
 class RandomForce(AbstractPerturbation):
@@ -141,7 +144,7 @@ class RandomForce(AbstractPerturbation):
 
     def fields(self, model):
         s = model.sample_points()
-        return scene_noise(self.key, self.amplitude, s, model.rod.L, self.grid), jnp.zeros_like(s)
+        return _noise(self, model, s), jnp.zeros_like(s)
 
     def initial_state(self, model, integrator=None):
         from .integrators.base import AbstractFixedStep

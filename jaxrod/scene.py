@@ -23,7 +23,6 @@ from .perturbations import (
     RandomVelocity,
     SineVelocity,
     project_to_mode,
-    scene_noise,
 )
 from .simulate import simulate
 
@@ -121,6 +120,9 @@ class Scene(eqx.Module):
             raise ValueError(f"mode = {self.mode!r} is invalid: expected an int >= 1.")
         if self.n is not None and not (isinstance(self.n, int) and self.n >= (1 if self.kind == "galerkin" else 4)):
             raise ValueError(f"n = {self.n!r} is invalid for the {self.kind} model.")
+        if self.kind == "rod3d" and isinstance(self.perturbation, RandomForce):
+            raise ValueError("perturbation = RandomForce is not available with the 3D rod: expected "
+                             "'sine', 'random-velocity' or 'random-shape'.")
         if self.dt is not None and not (isinstance(self.dt, (int, float)) and self.dt > 0):
             raise ValueError(f"dt = {self.dt!r} is invalid: expected a float > 0 [s].")
 
@@ -207,8 +209,6 @@ class Scene(eqx.Module):
     def initial_state(self):
         """(q₀, v₀) in the model's coordinates."""
         model = self.model()
-        if self.kind == "rod3d":
-            return self._rod3d_state(model)
         if self.kind != "mode":
             return self.perturbation.initial_state(model, self.integrator())
         if isinstance(self.perturbation, SineVelocity):
@@ -219,24 +219,6 @@ class Scene(eqx.Module):
         step = self.grid_dt or DT_FRACTION * 2.0 / self._static_omega(grid)
         q, v = self.perturbation.initial_state(grid, ProjectedVerlet(step))
         return project_to_mode(q, self.mode), project_to_mode(v, self.mode)
-
-    def _rod3d_state(self, model):
-        """The perturbation on the 3D rod's n + 1 nodes: a lateral velocity along the wall (sine,
-        random velocity) or a lateral offset along it (random shape), from straight and at
-        rest, pre-compressed to F."""
-        from .rod3d import sine_velocity
-
-        p, n = self.perturbation, model.n
-        if isinstance(p, SineVelocity):
-            return model.initial_state(self.F, lateral_velocity=sine_velocity(model, p.v0, p.mode))
-        if isinstance(p, (RandomVelocity, RandomShape)):
-            s = jnp.linspace(0.0, self.rod.L, n + 1)  # the nodes, ends included (where sin = 0)
-            u = scene_noise(p.key, p.amplitude, s, self.rod.L, p.grid, modes=n - 1)
-            if isinstance(p, RandomVelocity):
-                return model.initial_state(self.F, lateral_velocity=u)
-            return model.initial_state(self.F, lateral_offset=u)
-        raise ValueError(f"perturbation {type(p).__name__} is not available with the 3D rod: expected "
-                         "'sine', 'random-velocity' or 'random-shape'.")
 
     def _static_omega(self, model) -> float:
         try:

@@ -87,3 +87,18 @@ def test_a_failed_search_names_no_root():
     assert int(r.result) == bd.ROOT_RESULTS.invalid_bracket and np.isnan(float(r.root))
     r, _ = bd.critical_load(ROD, 15e-3, model="mode", bracket=(50.0, 100.0), sensitivities=())
     assert int(r.result) == bd.ROOT_RESULTS.invalid_bracket and np.isnan(float(r.root))
+
+
+def test_the_3d_rod_gets_the_same_modes_at_its_nodes():
+    """The 3D rod's lateral node velocities carry the same modes 1-12 as the field model's
+    nodal field (the 3D rod's n − 1 interior nodes resolve modes up to n − 1); a RandomForce
+    scene is refused with a one-line error."""
+    p = RandomVelocity(0.015, KEY)
+    c = _modes(p.fields(jr.FieldModel.from_rod(ROD, 384, dF=5.0))[1], 12)
+    sc = jr.scene.Scene(ROD, 5.0, p, "rod3d", n=40)
+    q, v = sc.initial_state()
+    lateral = np.asarray(v.v[1:-1, 1])  # on the straight rod at the bottom, along y
+    np.testing.assert_allclose(_modes(jnp.asarray(lateral), 12), c, rtol=0, atol=1e-12 * 0.015)
+    assert np.all(np.asarray(v.v)[[0, -1]] == 0.0)
+    with pytest.raises(ValueError, match="RandomForce is not available with the 3D rod"):
+        jr.scene.Scene(ROD, 5.0, jr.perturbations.RandomForce(2.0, KEY), "rod3d", n=40)

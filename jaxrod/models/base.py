@@ -63,6 +63,19 @@ class AbstractModel(eqx.Module):
         models; a projection for modal ones)."""
         return values
 
+    @property
+    def resolved_modes(self) -> int:
+        """How many sine modes sin(mπs/L) a field given at `sample_points` can carry (static):
+        one per sample point by default."""
+        return self.sample_points().shape[-1]
+
+    def perturbed_state(self, offset: Float[Array, " n"], velocity: Float[Array, " n"]):
+        """The initial state (q₀, v₀) of the rod in its reference state, displaced laterally by
+        `offset` [m] and moving laterally at `velocity` [m/s], both given at `sample_points`.
+        Default: θ = offset/R and θ̇ = velocity/R in the model's coordinates."""
+        R = self.rod.R
+        return self.from_samples(offset / R), self.from_samples(velocity / R)
+
     # -- defaults that models with per-DOF friction and a constant load inherit ----------------
 
     @property

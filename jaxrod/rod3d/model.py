@@ -381,6 +381,29 @@ class Rod3D(AbstractModel):
         contact at rest starts held by static friction)."""
         return straight_state(self, F, lateral_velocity, lateral_offset)
 
+    # -- where a perturbation field is given (the AbstractModel interface) -------------------
+    def sample_points(self) -> Float[Array, " n1"]:
+        """The n + 1 nodes of the straight rod, s_j = jL/n [m] (ends included, where every
+        sine field vanishes)."""
+        return jnp.arange(self.n + 1, dtype=self.rod.L.dtype) * (self.rod.L / self.n)
+
+    @property
+    def resolved_modes(self) -> int:
+        """n − 1: the sine modes the n − 1 interior nodes carry."""
+        return self.n - 1
+
+    def from_samples(self, values):
+        raise TypeError(
+            "Rod3D has no coordinates per sample point: a lateral field becomes a state through "
+            "Rod3D.perturbed_state (RandomForce and UserState fields are not available with the 3D rod)."
+        )
+
+    def perturbed_state(self, offset, velocity) -> tuple[Rod3DPosition, Rod3DVelocity]:
+        """The straight rod compressed by its dead load `end_load` [N] (zero under force or
+        displacement control), displaced along the wall by `offset` [m] and moving along it at
+        `velocity` [m/s] at its nodes (see `initial_state`)."""
+        return self.initial_state(self.end_load, lateral_velocity=velocity, lateral_offset=offset)
+
     # -- observables -------------------------------------------------------------------------
     def theta(self, x) -> Float[Array, " n1"]:
         """Angle of each node from the channel bottom [rad] (as θ in the field model)."""
