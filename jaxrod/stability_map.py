@@ -39,23 +39,19 @@ def grid_boundary(dF: np.ndarray, v0: np.ndarray, buckled: np.ndarray, ok: np.nd
 
 
 def fit_power_law(x: np.ndarray, y: np.ndarray):
-    """Least-squares fit of log y = log c + p log x.
+    """Least-squares fit of log y = log c + p log x (`numpy.polyfit`).
 
     **Returns:** `(p, p_stderr, c)`; the standard error is `nan` with fewer than 3 points.
     """
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if len(x) < 2:
+    lx, ly = np.log(np.asarray(x, float)), np.log(np.asarray(y, float))
+    if len(lx) < 2:
         return math.nan, math.nan, math.nan
-    X = np.c_[np.ones_like(x), np.log(x)]
-    coef, res, *_ = np.linalg.lstsq(X, np.log(y), rcond=None)
-    if len(x) > 2:
-        resid = np.log(y) - X @ coef
-        s2 = resid @ resid / (len(x) - 2)
-        cov = s2 * np.linalg.inv(X.T @ X)
-        se = math.sqrt(cov[1, 1])
+    if len(lx) == 2:
+        (p, logc), se = np.polyfit(lx, ly, 1), math.nan
     else:
-        se = math.nan
-    return float(coef[1]), se, float(math.exp(coef[0]))
+        (p, logc), cov = np.polyfit(lx, ly, 1, cov=True)
+        se = math.sqrt(cov[0, 0])
+    return float(p), float(se), float(math.exp(logc))
 
 
 def theory_boundary(rod: RodChannel, dF: np.ndarray, mode: int = 6) -> np.ndarray:
