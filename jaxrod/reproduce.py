@@ -27,7 +27,7 @@ def _runners() -> dict:
     compile the 3D rod)."""
     from .experiments import e2, e3, e4, e5, e6
     from .experiments.helix import post_buckling
-    from .experiments.rod3d import e1
+    from .experiments.e1 import e1
 
     return {"e1": e1, "e2": e2.e2, "e3": e3.e3, "e4": e4.e4, "e5": e5.e5, "e6": e6.e6, "helix": post_buckling}
 

@@ -23,7 +23,7 @@ def test_every_experiment_writes_figures_data_and_numbers(results):
     assert json.loads((out / "results.json").read_text()).keys() == res.keys()
     for f in ("e2/phase.png", "e3/map.png", "e3/map.json", "e4/e4_critical_load.png", "e4/e4_critical_load.csv",
               "e5/e5_modes.png", "e5/e5_modes.csv", "e6/e6_spectra.png", "e6/e6_spectra.csv",
-              "e1/e1_force_displacement.png", "e1/e1_force_displacement.csv", "e6/e6_full_model.png",
+              "e1/e1_force_displacement.png", "e1/e1_force_displacement.csv", "e1/e1_speed.png", "e1/e1_speed.csv", "e6/e6_full_model.png",
               "e6/e6_full_model.csv", "helix/helix_post_buckling.png", "helix/helix_post_buckling.csv"):
         assert (out / f).stat().st_size > 0, f
 

@@ -11,14 +11,12 @@ from .. import theory
 from ..output import subplots, write_csv
 from ..params import RodChannel
 from ._settings import _settings
+from .convergence import convergence, dominant_modes_at
 
 __all__ = ['e5']
 
 
 def e5(out, quick, progress):
-    import jax
-    import jax.numpy as jnp
-
     from ..boundary import critical_load_curve
     from ..scene import Scene, default_nodes, make_perturbation
 
@@ -38,21 +36,7 @@ def e5(out, quick, progress):
                                     bracket=(1e-3, s["max_dF"]), rtol=1e-4)
         dFs = np.asarray(rr.root) * 1.05  # just past the boundary
         ok = np.asarray(rr.result) == 0
-        probe = Scene(rod0, float(np.nanmax(dFs)), kind="field", n=n)
-        dt = probe.step()
-        root_key = jax.random.key(5)
-
-        def mode_at(mu, dF, i, r):
-            rod = RodChannel.reference(mu=mu)
-            key = jax.random.fold_in(root_key, i * R + r)
-            sc = Scene(rod, dF, make_perturbation(kind, amp, 6, key), "field", n, 6, dt)
-            sol = sc.run(t1=2.0, n_save=201, save_state=False)
-            from ..modal import dominant_mode
-
-            return dominant_mode(sol.q_final), sol.buckled
-
-        run = jax.jit(jax.vmap(jax.vmap(mode_at, (None, 0, None, 0)), (0, 0, 0, None)))
-        modes, buckled = run(jnp.asarray(mus), jnp.asarray(dFs), jnp.arange(len(mus)), jnp.arange(R))
+        modes, buckled = dominant_modes_at(kind, amp, mus, dFs, n, R, seed=5)
         modes = np.where(ok & np.asarray(buckled), np.asarray(modes), np.nan).astype(float)
         mean, std = np.nanmean(modes, axis=1), np.nanstd(modes, axis=1)
         res[kind] = {"n": n, "amplitude": amp, "mu": mus.tolist(), "dominant_mode_mean": mean.tolist(),
@@ -90,5 +74,6 @@ def e5(out, quick, progress):
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e5_modes.png"), dpi=130)
     write_csv(os.path.join(out, "e5_modes.csv"), rows)
+    res["convergence"] = convergence(out, quick, progress)  # of ΔF* and of the mode in n, at two μ
     return res
 

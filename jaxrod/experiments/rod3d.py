@@ -1,6 +1,7 @@
-"""The reference paper's full-model experiments with the 3D rod: E1 (displacement control), the
-assumption checks of E6, and the cross-check of the critical sine velocity against the field
-model. Each returns a dict of numbers and writes PNG + CSV; `jaxrod reproduce e1|e6` calls them."""
+"""The reference paper's full-model experiments with the 3D rod: E1's runs under displacement
+control (`e1_curves`; the experiment is `experiments.e1`), the assumption checks of E6, and the
+cross-check of the critical sine velocity against the field model. Each returns a dict of
+numbers and writes PNG + CSV; `jaxrod reproduce e1|e6` calls them."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from ..output import subplots, write_csv
 from ..simulate import simulate
 from ..rod3d import Rod3D, sine_velocity, step_limit
 
-__all__ = ["run", "e1_curves", "e1", "e6_full", "crosscheck_critical_velocity", "rolling_check", "SIZES"]
+__all__ = ["run", "e1_curves", "e6_full", "crosscheck_critical_velocity", "rolling_check", "SIZES"]
 
 SIZES = {
     "tiny": dict(n=12, v0s=(10e-3, 30e-3), conv=(12,), t1=0.4, n_save=201, dFs=(), n_cross=12),
@@ -84,53 +85,6 @@ def _used_step(t1, n_save, dt) -> float:
     from ..integrators.base import save_grid
 
     return save_grid(t1, n_save, dt)[1]
-
-
-def e1(out, quick=False, progress=True):
-    """E1: displacement control at 1 mm/s, μ = 0 and 0.3, v₀ over `SIZES`; the critical force
-    against v₀; its convergence in the segment count at μ = 0.3, v₀ = 15 mm/s."""
-    S = SIZES[quick]
-    fig, axes = subplots(1, 3, figsize=(15, 4.5))
-    res = {"model": "rod3d", "n_segments": S["n"], "speed_m_s": 1e-3, "v0_m_s": list(S["v0s"])}
-    rows = []
-    F0 = float(theory.frictionless_load(RodChannel.reference(0.0), 6))
-    for mu, ax in zip((0.0, 0.3), axes[:2]):
-        if progress:
-            print(f"  E1 μ = {mu}: {len(S['v0s'])} rods, {S['n']} segments", flush=True)
-        r = e1_curves(mu, S["v0s"], n=S["n"], t1=S["t1"], n_save=S["n_save"])
-        for k, v0 in enumerate(S["v0s"]):
-            ax.plot(r["displacement"][k] * 1e3, r["reaction"][k], label=f"v₀ = {v0 * 1e3:g} mm/s")
-            for d, f in zip(r["displacement"][k][::5], r["reaction"][k][::5]):
-                rows.append(dict(mu=mu, v0=v0, displacement=d, reaction=f))
-        ax.axhline(F0, color="k", lw=0.8, ls=":", label="F⁰₆ (frictionless theory)")
-        ax.set_xlabel("end displacement [mm]")
-        ax.set_ylabel("reaction at the pushed end [N]")
-        ax.set_title(f"E1: μ = {mu}, {S['n']} segments, pushed at 1 mm/s", fontsize=9)
-        ax.legend(fontsize=7)
-        res[f"mu={mu}"] = {"critical_force": r["critical_force"].tolist(),
-                           "d_critical_mm": (r["d_critical"] * 1e3).tolist(),
-                           "buckled": r["buckled"].tolist(),
-                           "energy_balance_max_J": r["balance"].tolist(),
-                           "dt": r["dt"]}
-        axes[2].plot(np.asarray(S["v0s"]) * 1e3, r["critical_force"], "o-", label=f"μ = {mu}")
-    res["F0_6_theory"] = F0
-    # convergence in n at μ = 0.3, v₀ = 15 mm/s
-    conv = []
-    for n in S["conv"]:
-        if progress:
-            print(f"  E1 convergence: {n} segments", flush=True)
-        r = e1_curves(0.3, (15e-3,), n=n, t1=S["t1"], n_save=S["n_save"])
-        conv.append(float(r["critical_force"][0]))
-    res["convergence"] = {"mu": 0.3, "v0": 15e-3, "n_segments": list(S["conv"]), "critical_force": conv}
-    axes[2].set_xlabel("v₀ [mm/s]")
-    axes[2].set_ylabel("critical force [N]")
-    axes[2].axhline(F0, color="k", lw=0.8, ls=":")
-    axes[2].set_title("critical force (peak reaction) against v₀", fontsize=9)
-    axes[2].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "e1_force_displacement.png"), dpi=130)
-    write_csv(os.path.join(out, "e1_force_displacement.csv"), rows)
-    return res
 
 
 def e6_full(out, quick=False, progress=True):
