@@ -1,0 +1,96 @@
+"""Helpers shared by the benchmark scripts (not a benchmark itself: `make bench` skips `_*.py`).
+
+The scripts are run as `python benchmarks/NAME.py`, so this directory is on `sys.path` and
+`from _common import ...` works. Nothing here touches the x64 switch: each script sets it
+before it imports jaxrod.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import time
+
+RESULTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
+
+
+def write_csv(path, rows, verbose=False):
+    """One header line (every key of every row, in the order first seen), then one line per
+    row (csv.DictWriter: missing keys left empty). Creates the folder; prints the path if
+    `verbose`."""
+    keys = []
+    for r in rows:
+        keys += [k for k in r if k not in keys]
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)
+    if verbose:
+        print(f"wrote {path}")
+
+
+def load_rows(path):
+    """Rows of a CSV written by `write_csv`, with numbers and booleans restored (empty cells
+    dropped)."""
+    def conv(v):
+        if v in ("True", "False"):
+            return v == "True"
+        try:
+            return float(v)
+        except ValueError:
+            return v
+
+    with open(path) as fh:
+        return [{k: conv(v) for k, v in r.items() if v != ""} for r in csv.DictReader(fh)]
+
+
+def best_of(fn, repeats):
+    """Minimum wall time [s] of `repeats` calls of `fn()` (no warm-up call)."""
+    best = math.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def time_jax(fn, args, repeats):
+    """(min over `repeats` calls of `jax.block_until_ready(fn(*args))` [s], compile time [s]):
+    the first call is timed separately and its excess over the best run counts as compile."""
+    import jax
+
+    t0 = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - t0
+    best = best_of(lambda: jax.block_until_ready(fn(*args)), repeats)
+    return best, max(first - best, 0.0)
+
+
+def timed(fn, *args, repeats=3, budget=4.0):
+    """(output, first call [s], min over up to `repeats` later calls [s]); the repeats stop once
+    they have used `budget` seconds (at least one is made when `repeats` ≥ 1)."""
+    import jax
+
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - t0
+    best, spent = math.inf, 0.0
+    for i in range(repeats):
+        if i and spent > budget:
+            break
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(fn(*args))
+        dt = time.perf_counter() - t0
+        best, spent = min(best, dt), spent + dt
+    return out, first, (best if repeats else first)
+
+
+def device_info(dtype="float64") -> dict:
+    """The device, JAX version and dtype a result was measured with (as CSV columns)."""
+    import jax
+
+    d = jax.devices()[0]
+    kind = d.device_kind if d.platform != "cpu" else f"cpu ({os.cpu_count()} cores)"
+    return dict(device=kind, jax=jax.__version__, dtype=dtype)
