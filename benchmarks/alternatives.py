@@ -28,12 +28,14 @@ n = 128); node-steps/s = n x members x steps / wall time. Wall times: min over r
 separate compilation call.
 
     python benchmarks/alternatives.py [--quick]
+
+The NumPy replica and the SciPy runs are in `_alternatives_reference.py`, the figure in
+`_alternatives_plot.py`.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -49,9 +51,10 @@ import numpy as np  # noqa: E402
 import jaxrod as jr  # noqa: E402
 from jaxrod.integrators.base import save_grid  # noqa: E402
 
-DF = 5.0
-MU = 0.3
-EPS_V = 1e-4  # m/s: the tanh regularisation as a lateral speed (1/200 of a 20 mm/s perturbation)
+from _alternatives_plot import plot  # noqa: E402
+from _alternatives_reference import DF, MU, NumpyField, initial_states, scipy_member  # noqa: E402
+from _common import best_of, time_jax, write_csv  # noqa: E402
+
 # float64 arithmetic per node and step of the FD scheme as timed (add, sub, mul, div; abs, sign,
 # comparisons and selects not counted): two kicks 2+2, two proximal steps 2+2 (h f, v - h f sgn v),
 # drift 2, acceleration 14 (two second differences 4+4, EI d4 + F d2 + (w/R) theta 5, / rho 1).
@@ -62,15 +65,6 @@ BYTES_PER_NODE_STEP = 6 * 8
 
 
 # -- machine peaks -------------------------------------------------------------------------------
-
-def best_of(fn, repeats):
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
 
 def machine_peaks(size: int, repeats: int) -> dict:
     rng = np.random.default_rng(0)
@@ -144,91 +138,6 @@ def amplitudes(batch: int) -> np.ndarray:
     return np.linspace(0.001, 0.05, batch)
 
 
-def time_jax(fn, args, repeats):
-    t0 = time.perf_counter()
-    jax.block_until_ready(fn(*args))
-    first = time.perf_counter() - t0
-    best = best_of(lambda: jax.block_until_ready(fn(*args)), repeats)
-    return best, max(first - best, 0.0)
-
-
-# -- the NumPy replica ---------------------------------------------------------------------------
-
-class NumpyField:
-    """Projected Verlet on the FD field model, vectorised over a (batch, n) array in NumPy:
-    the scheme of `jaxrod.ProjectedVerlet` + `jaxrod.FieldModel(operator="fd")` + `Coulomb`,
-    operation for operation."""
-
-    def __init__(self, n: int, threshold: float = math.inf):
-        rod = jr.RodChannel.reference(mu=MU)
-        model = jr.FieldModel.from_rod(rod, n, dF=DF)
-        self.n = n
-        self.EI = float(rod.EI)
-        self.rho = float(rod.rho)
-        self.wR = float(rod.w / rod.R)
-        self.F = float(model.load(0.0))
-        self.inv_h2 = 1.0 / float(model.spacing) ** 2
-        self.spacing2 = float(model.spacing) ** 2
-        fs, fd = model.friction_bounds(0.0)
-        self.fs, self.fd = float(fs), float(fd)
-        self.ke = float(rod.rho * rod.R**2 * model.spacing)  # kinetic energy = ke/2 |v|^2
-        self.thr = threshold  # buckling stop: max|θ| past it freezes the member, as in jaxrod
-
-    def d2(self, x):
-        out = -2.0 * x
-        out[:, 1:] += x[:, :-1]
-        out[:, :-1] += x[:, 1:]
-        return out / self.spacing2
-
-    def acceleration(self, q):
-        d2 = self.d2(q)
-        return -(self.EI * self.d2(d2) + self.F * d2 + self.wR * q) / self.rho
-
-    def prox(self, v_trial, v_prev, h):
-        threshold = h * np.where(v_prev == 0, self.fs, self.fd)
-        slips = np.abs(v_trial) > threshold
-        return np.where(slips, v_trial - h * self.fd * np.sign(v_trial), 0.0)
-
-    def work(self, v_prev, v_trial, v_after):
-        return self.ke * np.sum(0.5 * (v_prev + v_after) * (v_trial - v_after), axis=-1)
-
-    def run(self, q, v, h, steps, work=True):
-        """`steps` steps of size `h` from (q, v) [rad, rad/s], shape (batch, n). With
-        `work=False` the dissipated energy is not accumulated (timed runs: the jaxrod run timed
-        returns only the final angles, so XLA drops that bookkeeping too)."""
-        q, v = q.copy(), v.copy()
-        a = self.acceleration(q)
-        D = np.zeros(q.shape[0])
-        done = np.zeros((q.shape[0], 1), bool)
-        freeze = math.isfinite(self.thr)  # a NumPy user without a stop would not write it
-        half = 0.5 * h
-        for _ in range(steps):
-            v_trial = v + half * a
-            v_half = self.prox(v_trial, v, half)
-            dD = self.work(v, v_trial, v_half) if work else 0.0
-            q1 = q + h * v_half
-            a1 = self.acceleration(q1)
-            v_trial = v_half + half * a1
-            v1 = self.prox(v_trial, v_half, half)
-            if work:
-                dD = dD + self.work(v_half, v_trial, v1)
-            if freeze:
-                q, v, a = (np.where(done, x, x1) for x, x1 in ((q, q1), (v, v1), (a, a1)))
-                D = np.where(done[:, 0], D, D + dD)
-                done = done | (np.max(np.abs(q1), axis=-1, keepdims=True) > self.thr)
-            else:
-                q, v, a, D = q1, v1, a1, D + dD
-                np.max(np.abs(q), axis=-1) > self.thr  # the amplitude test jaxrod makes every step
-        return q, v, D
-
-
-def initial_states(n: int, v0: np.ndarray):
-    rod = jr.RodChannel.reference(mu=MU)
-    m = jr.FieldModel.from_rod(rod, n, dF=DF)
-    q0, w0 = jax.vmap(lambda a: jr.SineVelocity(a, 6).initial_state(m))(jnp.asarray(v0))
-    return np.asarray(q0), np.asarray(w0)
-
-
 def verify_numpy(n: int, steps: int) -> float:
     """Largest relative difference between the NumPy replica and jaxrod (q, v, dissipated)
     after `steps` steps, both with the package's buckling stop at max|θ| = 0.5 rad (past it the
@@ -241,35 +150,6 @@ def verify_numpy(n: int, steps: int) -> float:
     qn, vn, Dn = NumpyField(n, threshold=0.5).run(q0, w0, h, steps)
     rel = lambda x, y: float(np.max(np.abs(x - y)) / np.max(np.abs(y)))
     return max(rel(qn, qj), rel(vn, vj), rel(Dn, Dj))
-
-
-# -- SciPy solve_ivp with the smoothed law -------------------------------------------------------
-
-def scipy_member(n: int, v0: float, t1: float, method: str):
-    from scipy.integrate import solve_ivp
-
-    f = NumpyField(n)
-    eps = EPS_V / float(jr.RodChannel.reference(mu=MU).R)
-    q0, w0 = initial_states(n, np.array([v0]))
-
-    def rhs(t, y):
-        q, v = y[:n], y[n:]
-        d2 = np.empty(n)
-        d2[:] = -2.0 * q
-        d2[1:] += q[:-1]
-        d2[:-1] += q[1:]
-        d2 /= f.spacing2
-        d4 = -2.0 * d2
-        d4[1:] += d2[:-1]
-        d4[:-1] += d2[1:]
-        d4 /= f.spacing2
-        a = -(f.EI * d4 + f.F * d2 + f.wR * q) / f.rho - f.fd * np.tanh(v / eps)
-        return np.concatenate([v, a])
-
-    t0 = time.perf_counter()
-    sol = solve_ivp(rhs, (0.0, t1), np.concatenate([q0[0], w0[0]]), method=method, rtol=1e-6, atol=1e-9)
-    wall = time.perf_counter() - t0
-    return wall, sol.y[:n, -1], int(sol.nfev), bool(sol.success)
 
 
 # -- the benchmark -------------------------------------------------------------------------------
@@ -436,53 +316,10 @@ def main():
           f"{summary['spectral_over_fd_members']:.2f}x the FD members/s")
     print(f"total {summary['seconds']} s")
 
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(args.out, rows)
     with open(os.path.splitext(args.out)[0] + "_summary.json", "w") as fh:
         json.dump(summary, fh, indent=1)
     plot(rows, ns, os.path.splitext(args.out)[0] + ".png", info, steps)
-
-
-def plot(rows, ns, path, info, steps):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    styles = {
-        "jaxrod vmap (FD)": dict(color="C0", marker="o", lw=2),
-        "jaxrod vmap (spectral, dense)": dict(color="C0", marker="s", ls="--"),
-        "numpy vectorised (FD)": dict(color="C1", marker="^"),
-        "python loop of jitted runs": dict(color="C2", ls=":"),
-        "scipy solve_ivp RK45 (tanh law)": dict(color="C3", ls="-."),
-        "scipy solve_ivp LSODA (tanh law)": dict(color="C4", ls="-."),
-    }
-    fig, axes = plt.subplots(1, len(ns), figsize=(5.2 * len(ns), 4.6), squeeze=False)
-    for ax, n in zip(axes[0], ns):
-        batches = sorted({r["batch"] for r in rows if r["n"] == n and r["impl"].startswith("jaxrod vmap")})
-        for impl, st in styles.items():
-            sel = [r for r in rows if r["impl"] == impl and r["n"] == n]
-            if not sel:
-                continue
-            if impl.startswith(("jaxrod vmap", "numpy")):
-                ax.plot([r["batch"] for r in sel], [r["members_per_s"] for r in sel], label=impl, **st)
-            else:  # one member at a time: a constant rate
-                ax.plot([batches[0], batches[-1]], [sel[-1]["members_per_s"]] * 2, label=impl, **st)
-        ax.set_xscale("log", base=2)
-        ax.set_yscale("log")
-        ax.set_xlabel("batch size (members per call)")
-        ax.set_ylabel(f"members/s ({steps}-step horizon)")
-        ax.set_title(f"n = {n}", fontsize=10)
-        ax.grid(alpha=0.3, which="both")
-    axes[0][0].legend(fontsize=7)
-    fig.suptitle(f"Field model throughput, float64, {info['device']}, {info['cores']} cores, "
-                 f"JAX {info['jax']}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 if __name__ == "__main__":

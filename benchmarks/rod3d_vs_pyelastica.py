@@ -57,7 +57,6 @@ says so and exits 0.
 from __future__ import annotations
 
 import argparse
-import csv
 import importlib.metadata
 import math
 import os
@@ -84,6 +83,8 @@ import jax.numpy as jnp  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 from jaxrod.rod3d import Rod3D, step_limit  # noqa: E402
+
+from _common import write_csv  # noqa: E402
 
 L = 0.3  # m
 A0 = 1e-3  # m/s: lateral velocity amplitude (midpoint displacement ~ A0 / w1 = 7 um)
@@ -371,15 +372,7 @@ def main():
                   + (f", trajectory max diff / peak = {r['traj_rel_diff']:.2e}" if "traj_rel_diff" in r else ""))
     print(f"\nwall time {wall:.0f} s")
 
-    keys = []
-    for r in rows:
-        keys += [k for k in r if k not in keys]
-    os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
-    with open(a.out, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
-    print(f"wrote {a.out}")
+    write_csv(a.out, rows, verbose=True)
 
 
 if __name__ == "__main__":

@@ -25,13 +25,14 @@ CPU device per core), as `jaxrod map` does. Writes benchmarks/results/sweep_thro
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
 import subprocess
 import sys
 import time
+
+from _common import write_csv
 
 
 def _chunk_lane_steps(steps, m: int, devices: int) -> int:
@@ -157,14 +158,7 @@ def main():
         if r["method"] == "chunk" and loop is not None:
             r["x_loop"] = round(r["members_per_s"] / loop["members_per_s"], 2)
         print(r)
-    keys = []
-    for r in rows:
-        keys += [k for k in r if k not in keys]
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(args.out, rows)
 
 
 if __name__ == "__main__":
