@@ -37,6 +37,7 @@ __all__ = [
     "UserState",
     "initial_state",
     "scene_noise",
+    "scene_noise_modes",
     "GRID",
 ]
 
@@ -59,13 +60,21 @@ def scene_noise(key, amplitude, s, L, grid: int | None = GRID, modes: int | None
         return jax.random.uniform(key, s.shape, s.dtype, -1.0, 1.0) * amplitude
     if not (isinstance(grid, int) and grid >= 2):
         raise ValueError(f"grid = {grid!r} is invalid: expected an int >= 2 (segments) or None.")
-    j = jnp.arange(1, grid, dtype=s.dtype)
-    r = jax.random.uniform(key, (grid - 1,), s.dtype, -1.0, 1.0) * amplitude
-    m = jnp.arange(1, min(grid - 1, s.shape[-1] if modes is None else modes) + 1, dtype=s.dtype)
+    c = scene_noise_modes(key, amplitude, grid, min(grid - 1, s.shape[-1] if modes is None else modes), s.dtype)
+    m = jnp.arange(1, c.shape[-1] + 1, dtype=s.dtype)
+    return jnp.sum(jnp.sin(jnp.pi * s[:, None] * m[None, :] / L) * c[None, :], axis=-1)
+
+
+def scene_noise_modes(key, amplitude, grid: int = GRID, modes: int | None = None, dtype=None):
+    """The sine coefficients c_m, m = 1..`modes` (default grid − 1), of the field that
+    `scene_noise` draws from `key`: c_m = (2/grid) Σ_j r_j sin(mπj/grid) [units of `amplitude`]."""
+    dtype = dtype or jnp.result_type(float)
+    j = jnp.arange(1, grid, dtype=dtype)
+    r = jax.random.uniform(key, (grid - 1,), dtype, -1.0, 1.0) * amplitude
+    m = jnp.arange(1, (grid - 1 if modes is None else modes) + 1, dtype=dtype)
     # sums rather than matrix products: the same reduction order alone and under vmap, so a
     # sweep member equals its single run bit for bit
-    c = (2.0 / grid) * jnp.sum(jnp.sin(jnp.pi * m[:, None] * j[None, :] / grid) * r[None, :], axis=-1)
-    return jnp.sum(jnp.sin(jnp.pi * s[:, None] * m[None, :] / L) * c[None, :], axis=-1)
+    return (2.0 / grid) * jnp.sum(jnp.sin(jnp.pi * m[:, None] * j[None, :] / grid) * r[None, :], axis=-1)
 
 
 def _noise(p, model, s):

@@ -56,7 +56,10 @@ def simulate(
         raise ValueError(f"t1 = {t1!r} is invalid: expected a finite float > 0 [s].")
     if not (isinstance(n_save, int) and n_save >= 2):
         raise ValueError(f"n_save = {n_save!r} is invalid: expected an int >= 2.")
-    checked = isinstance(integrator, AbstractFixedStep) and _is_concrete(model)
+    # checked when the limit is concrete: the model's and the scheme's parameters (its friction
+    # law's smoothing, say) known at trace time, whatever dt is
+    checked = (isinstance(integrator, AbstractFixedStep) and _is_concrete(model)
+               and _is_concrete(dataclasses.replace(integrator, dt=1.0)))
     if checked:
         with jax.ensure_compile_time_eval():  # concrete even inside a caller's jit
             # the limit does not depend on dt: one compilation for every dt of a scheme

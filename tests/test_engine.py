@@ -58,3 +58,24 @@ def test_options_have_one_meaning_for_every_model():
         assert float(go_on.t_buckle) == float(stop.t_buckle), kind
         assert float(stop.t_stop) < t1 and float(go_on.t_stop) == pytest.approx(t1), kind
         assert int(go_on.n_steps) > int(stop.n_steps), kind
+
+
+def test_a_traced_smoothing_width_is_differentiable_through_simulate():
+    """The step-limit check runs at trace time only when both the model and the scheme's
+    parameters are concrete: with a friction smoothing width traced by `jit` (the failure
+    atlas's gradient entry) it goes to the in-run check, and dA(T)/dȦ₀ by `jax.grad` matches
+    central differences of the same function."""
+    m = jr.SingleMode.from_rod(jr.RodChannel.reference(0.3), 6, dF=5.0)
+    opts = jr.RunOptions(early_exit=False, save_state=False)
+
+    def final(v0, eps):
+        sol = jr.simulate(m, jr.ProjectedVerlet(1e-4, jr.Tanh(eps)), 0.0, v0, 0.05, n_save=2,
+                          options=opts, throw=False)
+        return sol.q_final
+
+    eps = 2.0 * 1e-4 * float(m.f_d)  # h·f/ε = 0.5: the tanh law's gradient is sound there
+    g = float(jax.jit(jax.grad(final))(0.004, eps))
+    val = jax.jit(final)
+    h = 1e-7
+    fd = (float(val(0.004 + h, eps)) - float(val(0.004 - h, eps))) / (2 * h)
+    assert np.isfinite(g) and g == pytest.approx(fd, rel=1e-5)
