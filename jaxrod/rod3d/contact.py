@@ -7,6 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._numerics import safe_norm
 from .so3 import skew
 
 __all__ = ["contact_frames", "node_weights", "friction_pass"]
@@ -29,59 +30,88 @@ def node_weights(model):
     count = left + right
     return jnp.asarray(left / count), jnp.asarray(right / count)
 
-def friction_pass(model, friction, x, v, Q, w, N, stuck, h):
+def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     """The friction impulses of a (half) step `h` [s] under the law `friction`
-    ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]), even nodes then odd nodes.
-    Returns the new (v, w, stuck)."""
+    ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]): projected Gauss–Seidel sweeps, even nodes then
+    odd nodes, started from the impulses `force`·h of the last pass (clipped to this pass's
+    bounds), repeated until no impulse changes by more than `model.friction_tol` × the largest
+    friction bound, or `model.friction_sweeps` sweeps.
+
+    **Returns:** the new `(v, w, stuck, force, residual)`: `force` the tangential friction force
+    of each contact [N], `residual` the largest change of an impulse in the last sweep over the
+    largest bound."""
+    dtype = x.dtype
     if not model.channel:  # no wall, no contact, no friction
-        return v, w, stuck
-    held, _ = model.held()
+        return v, w, stuck, jnp.zeros_like(force), jnp.zeros((), dtype)
+    # a held node still touches the wall: its translation is prescribed (the support takes the
+    # friction force) but the friction at its contact point still acts on its segments' spin, so
+    # the end of the rod cannot roll freely (without it the interior rolls sideways as one body,
+    # the end segments tilting, and a loaded rod buckles through that roll: issue [rod3d])
+    held_n, held_s = model.held()
+    free_n = (~held_n).astype(dtype)
     T, rc = contact_frames(model, x)
     cl, cr = node_weights(model)
     Jinv = 1.0 / model.inertia
     m = model.mass
-    Jlab_inv = jnp.einsum("jba,b,jbc->jac", Q, Jinv, Q)  # Qᵀ diag(1/J) Q
-    pad = jnp.zeros((1, 3, 3), x.dtype)
+    Jlab_inv = jnp.einsum("jba,b,jbc->jac", Q, Jinv, Q) * (~held_s).astype(dtype)[:, None, None]  # Qᵀ diag(1/J) Q
+    pad = jnp.zeros((1, 3, 3), dtype)
     Jl = jnp.concatenate([pad, Jlab_inv], 0)  # segment i−1 of node i
     Jr = jnp.concatenate([Jlab_inv, pad], 0)  # segment i of node i
     Rx = skew(rc)
-    K = (jnp.eye(3, dtype=x.dtype)[None] / m[:, None, None]
+    K = (free_n[:, :, None] * jnp.eye(3, dtype=dtype)[None] / m[:, None, None]
          - (cl**2)[:, None, None] * Rx @ Jl @ Rx
          - (cr**2)[:, None, None] * Rx @ Jr @ Rx)
     W = jnp.einsum("iab,ibc,idc->iad", T, K, T)
+    # a point that nothing can move (a clamped end) takes no impulse
+    movable = (W[:, 0, 0] * W[:, 1, 1] - W[:, 0, 1] * W[:, 1, 0]) > 0
+    W = jnp.where(movable[:, None, None], W, jnp.eye(2, dtype=dtype)[None])
     mu_s, mu_d = model.rod.mu_s, model.rod.mu_d
-    in_contact = (N > 0) & ~jnp.any(held, -1)
+    in_contact = (N > 0) & movable
     idx = jnp.arange(model.n + 1)
-    p_acc = jnp.zeros((model.n + 1, 2), x.dtype)  # each node's impulse so far (this half step)
+    bound_s, bound_d = mu_s * N * h, mu_d * N * h
+    scale = jnp.maximum(jnp.max(jnp.where(in_contact, bound_s, 0.0)), jnp.finfo(dtype).tiny)
+
+    def apply(v, w, dp):
+        """Node and segment velocities after the contact impulses `dp` (n+1, 2)."""
+        P = jnp.einsum("iab,ia->ib", T, dp)  # lab impulse on the node
+        v = v + free_n * P / m[:, None]
+        torque = jnp.cross(rc, P)  # lab torque impulse at the node
+        tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
+        w = w + jnp.where(held_s[:, None], 0.0, Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg))
+        return v, w
+
+    # warm start: last pass's forces, within this pass's bounds
+    p0 = jnp.where(in_contact[:, None], force * h, 0.0)
+    cap = jnp.where(stuck, bound_s, bound_d)
+    p0 = p0 * jnp.minimum(1.0, cap / jnp.maximum(safe_norm(p0), jnp.finfo(dtype).tiny))[:, None]
+    v, w = apply(v, w, p0)
 
     def sweep(carry):
-        v, w, stuck, p_acc = carry
+        v, w, stuck, p_acc, _, k = carry
+        change = jnp.zeros((), dtype)
         for colour in (0, 1):
-            active = in_contact & (idx % 2 == colour)
+            mine = idx % 2 == colour
+            active = in_contact & mine
             wlab = jnp.einsum("jba,jb->ja", Q, w)
-            zero = jnp.zeros((1, 3), x.dtype)
+            zero = jnp.zeros((1, 3), dtype)
             wbar = cl[:, None] * jnp.concatenate([zero, wlab], 0) + cr[:, None] * jnp.concatenate([wlab, zero], 0)
             u = jnp.einsum("iab,ib->ia", T, v + jnp.cross(wbar, rc))
             u = u - jnp.einsum("iab,ib->ia", W, p_acc)  # without the node's own impulse
-            bound_s = mu_s * N * h
-            bound_d = mu_d * N * h
             p, sticks = friction.impulse_2d(u, W, jnp.where(stuck, bound_s, bound_d), bound_d)
             p, sticks = jnp.where(active[:, None], p, 0.0), active & sticks
-            mine = (idx % 2 == colour)[:, None]
-            dp = jnp.where(mine, p - p_acc, 0.0)
-            p_acc = jnp.where(mine, p, p_acc)
-            P = jnp.einsum("iab,ia->ib", T, dp)  # lab impulse on the node
-            v = v + P / m[:, None]
-            torque = jnp.cross(rc, P)  # lab torque impulse at the node
-            tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
-            w = w + Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg)
-            stuck = jnp.where(idx % 2 == colour, active & sticks, stuck)
-        return v, w, stuck, p_acc
+            dp = jnp.where(mine[:, None], p - p_acc, 0.0)
+            change = jnp.maximum(change, jnp.max(safe_norm(dp)))
+            p_acc = jnp.where(mine[:, None], p, p_acc)
+            v, w = apply(v, w, dp)
+            stuck = jnp.where(mine, active & sticks, stuck)
+        return v, w, stuck, p_acc, change / scale, k + 1
 
-    carry = (v, w, stuck, p_acc)
-    if model.friction_sweeps == 1:
-        carry = sweep(carry)
-    else:  # a loop, not an unrolled copy per sweep (compile time)
-        carry = jax.lax.fori_loop(0, model.friction_sweeps, lambda _, c: sweep(c), carry)
-    v, w, stuck, _ = carry
-    return v, w, stuck
+    def more(carry):
+        return (carry[-1] < model.friction_sweeps) & (carry[-2] > model.friction_tol)
+
+    carry = sweep((v, w, stuck, p0, jnp.zeros((), dtype), 0))
+    if model.friction_sweeps > 1:  # a loop, not an unrolled copy per sweep (compile time)
+        carry = jax.lax.while_loop(more, sweep, carry)
+    v, w, stuck, p_acc, residual, _ = carry
+    force = p_acc / jnp.where(h > 0, h, 1.0)
+    return v, w, stuck, force, jnp.where(jnp.any(in_contact), residual, 0.0)

@@ -61,8 +61,13 @@ class Rod3D(AbstractModel):
     - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (for
       quasi-static tests; 0 by default).
     - `rotary_scale`: α ≥ 1 on the transverse rotary inertia (default: see module docstring).
-    - `friction_sweeps`: projected Gauss–Seidel sweeps of the red–black friction pass per half
-      step (static, default 1); more sweeps converge the coupled impulses of neighbouring nodes.
+    - `friction_sweeps`: the most projected Gauss–Seidel sweeps of the red–black friction pass
+      per half step (static, default 64; 1: a single sweep, the coupled impulses of
+      neighbouring nodes then left unconverged, which lets held contacts creep).
+    - `friction_tol`: the pass stops once no contact impulse changes by more than this
+      fraction of the largest friction bound μ_s N h in a sweep (default 1e-4); each pass
+      starts from the last one's impulses, so a held rod converges in one sweep. The residual
+      of the last pass is `v.residual` (recorded as the observable `friction_residual`).
     - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
       models assume) (static).
@@ -80,6 +85,7 @@ class Rod3D(AbstractModel):
     control: str = eqx.field(static=True)
     gravity: bool = eqx.field(static=True)
     friction_sweeps: int = eqx.field(static=True)
+    friction_tol: Float[Array, ""]
     friction_at: str = eqx.field(static=True)
     speed: Float[Array, ""]
     end_load: Float[Array, ""]
@@ -104,7 +110,8 @@ class Rod3D(AbstractModel):
         contact_damping: ArrayLike = 0.0,
         damping: ArrayLike = 0.0,
         rotary_scale: ArrayLike | None = None,
-        friction_sweeps: int = 1,
+        friction_sweeps: int = 64,
+        friction_tol: ArrayLike = 1e-4,
         friction_at: str = "surface",
         body_force: ArrayLike = (0.0, 0.0, 0.0),
         gravity: bool = True,
@@ -139,6 +146,7 @@ class Rod3D(AbstractModel):
         if not (isinstance(friction_sweeps, int) and friction_sweeps >= 1):
             raise ValueError(f"Rod3D.friction_sweeps = {friction_sweeps!r} is invalid: expected an int >= 1.")
         self.friction_sweeps = friction_sweeps
+        self.friction_tol = float_leaf(friction_tol)
         if friction_at not in ("surface", "axis"):
             raise ValueError(f"Rod3D.friction_at = {friction_at!r} is invalid: expected 'surface' or 'axis'.")
         self.friction_at = friction_at
@@ -244,7 +252,8 @@ class Rod3D(AbstractModel):
     def acceleration(self, q: Rod3DPosition, t=None) -> Rod3DForces:
         """The conservative forces at `q` (those of a rod at rest)."""
         zero = Rod3DVelocity(jnp.zeros_like(q.x), jnp.zeros(q.Q.shape[:-1], q.x.dtype),
-                             jnp.zeros(q.x.shape[:1], bool))
+                             jnp.zeros(q.x.shape[:1], bool), jnp.zeros(q.x.shape[:1] + (2,), q.x.dtype),
+                             jnp.zeros((), q.x.dtype))
         return self.accelerations(q, zero, t)
 
     def accelerations(self, q: Rod3DPosition, v: Rod3DVelocity, t=None) -> Rod3DForces:
@@ -259,7 +268,7 @@ class Rod3D(AbstractModel):
         vn = v.v + h * a.f / self.mass[:, None]
         w = v.w + h * (a.tau - jnp.cross(v.w, J * v.w)) / J
         vn, w = self.constrain(vn, w)
-        return Rod3DVelocity(vn, w, v.stuck)
+        return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual)
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
@@ -275,9 +284,12 @@ class Rod3D(AbstractModel):
         """The wall friction impulses of a (half) step `h` at the contact points of `q` under
         the normal forces `a.N` (red–black, see the module docstring); a step of zero length
         changes nothing (not even the stuck flags)."""
-        v, w, stuck = self.friction_step(friction, q.x, v_trial.v, q.Q, v_trial.w, a.N, v_prev.stuck, h)
+        v, w, stuck, force, res = self.friction_step(friction, q.x, v_trial.v, q.Q, v_trial.w, a.N, v_prev.stuck,
+                                                     v_trial.force, h)
         v, w = self.constrain(v, w)
-        return Rod3DVelocity(v, w, jnp.where(h > 0, stuck, v_prev.stuck))
+        moved = h > 0
+        return Rod3DVelocity(v, w, jnp.where(moved, stuck, v_prev.stuck), jnp.where(moved, force, v_trial.force),
+                             jnp.where(moved, res, v_trial.residual))
 
     def impulse_work(self, v_prev: Rod3DVelocity, v_trial: Rod3DVelocity, v_after: Rod3DVelocity,
                      a: Rod3DForces, h):
@@ -323,7 +335,8 @@ class Rod3D(AbstractModel):
         along x [m]; `normal_force` (n+1,) wall force per length [N/m]; `axial_force` (n,)
         compressive force of every segment [N]; `height` largest height of the centre line
         above the channel bottom [m]; `gap` largest distance of a node inside the clearance
-        circle, R − r [m] (> 0 where the rod has lifted off the wall)."""
+        circle, R − r [m] (> 0 where the rod has lifted off the wall); `friction_residual` the
+        relative residual of the last friction pass (see `friction_tol`)."""
         x = q.x
         return dict(
             theta=self.theta(x),
@@ -333,6 +346,7 @@ class Rod3D(AbstractModel):
             axial_force=self.axial_force(x, q.Q),
             height=jnp.max(x[:, 2]) + self.rod.R + self.static_sag(),
             gap=jnp.max(-self.penetration(x)[0]) if self.channel else jnp.zeros((), x.dtype),
+            friction_residual=v.residual,
         )
 
     # -- forces ----------------------------------------------------------------------------
@@ -346,10 +360,11 @@ class Rod3D(AbstractModel):
         return energy.forces(self, x, Q, v)
 
     # -- friction ----------------------------------------------------------------------------
-    def friction_step(self, friction, x, v, Q, w, N, stuck, h):
+    def friction_step(self, friction, x, v, Q, w, N, stuck, force, h):
         """The friction impulses of a (half) step `h` [s] under the law `friction`, even nodes
-        then odd nodes (`jaxrod.rod3d.contact.friction_pass`). Returns the new (v, w, stuck)."""
-        return friction_pass(self, friction, x, v, Q, w, N, stuck, h)
+        then odd nodes, started from the last pass's forces (`jaxrod.rod3d.contact.friction_pass`).
+        Returns the new (v, w, stuck, force, residual)."""
+        return friction_pass(self, friction, x, v, Q, w, N, stuck, force, h)
 
     # -- constraints and the step limit -------------------------------------------------------
     def constrain(self, v, w):

@@ -23,13 +23,18 @@ class Rod3DPosition(eqx.Module):
 
 class Rod3DVelocity(eqx.Module):
     """The rod's velocities `v`: node velocities `v` (n+1, 3) [m/s], segment angular
-    velocities `w` (n, 3) in the material frame [rad/s], and the friction law's memory `stuck`
-    (n+1,): whether each contact was held by static friction at the last impulse (it then
-    keeps the static coefficient)."""
+    velocities `w` (n, 3) in the material frame [rad/s], and the friction pass's memory:
+    `stuck` (n+1,), whether each contact was held by static friction at the last impulse (it
+    then keeps the static coefficient); `force` (n+1, 2), the tangential wall friction force of
+    the last impulse [N] (axial, lateral), which starts the next pass (warm start); `residual`,
+    the largest change of a contact impulse in the last sweep of that pass relative to the
+    largest friction bound (0 when no contact is active)."""
 
     v: Float[Array, "n1 3"]
     w: Float[Array, "n 3"]
     stuck: Bool[Array, " n1"]
+    force: Float[Array, "n1 2"]
+    residual: Float[Array, ""]
 
 
 class Rod3DForces(eqx.Module):
@@ -79,7 +84,7 @@ def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_off
     Q = jnp.stack([d1, d2, d3], -2)
     v, w = model.constrain(v, jnp.zeros((n, 3), dtype))
     at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
-    return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest)
+    return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest, jnp.zeros((n + 1, 2), dtype), jnp.zeros((), dtype))
 
 
 def wall_angle(x: Float[Array, "... n1 3"]) -> Float[Array, "... n1"]:
