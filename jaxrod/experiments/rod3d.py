@@ -220,19 +220,22 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
     return out
 
 
-def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps=(1, 16)):
+def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps=(1, 64)):
     """Does a rod that the reduced models call stuck stay put in the 3D model? The rod is
     pre-compressed to the dead load F⁰₆ + `dF` and given a lateral offset R·A·sin(mπs/L)
     (A = `amplitude` rad, m = `mode`) at rest; its net elastic + gravity restoring force per
     length, |EI k⁴ − F k² + w/R|·A·R, is a fraction `margin` < 1 of μ·w (the field model's
     stick condition, P1), so in the field model it does not move. Run for `t1` [s] with friction
     at the contact point (`friction_at="surface"`: the rod can roll) and at the centre line
-    (`"axis"`: sliding only), each with every number of projected Gauss–Seidel friction sweeps in
-    `sweeps`.
+    (`"axis"`: sliding only), each with every largest number of projected Gauss–Seidel
+    friction sweeps in `sweeps` (each pass warm-started; 64: converged to `friction_tol`).
 
     **Returns:** dict with `margin` and, per case, `max_dtheta` (largest |θ(t1) − θ(0)| [rad]),
     `mean_dtheta` (mean of θ(t1) − θ(0) over the interior: a rigid roll around the channel shows
-    as mean ≈ max) and `all_stuck` (every interior node held by static friction at t1).
+    as mean ≈ max), `all_stuck` (every interior node held by static friction at t1) and
+    `friction_residual` (of the last pass); and `elastic_roll`, the largest |Δθ| of the roll that
+    the holding friction sets up when the ends spin freely, r² f̂ L/(2 GJ k R) (f̂ the held
+    force per length, r the rod's radius, k = mπ/L).
     """
     rod = RodChannel.reference(mu)
     F = float(theory.reference_load(rod)) + dF
@@ -240,8 +243,10 @@ def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps
     EI, w, R = float(rod.EI), float(rod.w), float(rod.R)
     margin = abs(EI * k**4 - F * k**2 + w / R) * amplitude / (mu * w / R)
     s = jnp.linspace(0.0, 1.0, n + 1)
+    r = 0.5 * float(rod.d)
     res = {"dF": dF, "n_segments": n, "mu": mu, "mode": mode, "amplitude_rad": amplitude, "t1": t1,
-           "margin_net_force_over_mu_N": margin}
+           "margin_net_force_over_mu_N": margin,
+           "elastic_roll": r**2 * margin * mu * w * float(rod.L) / (2 * float(rod.GJ) * k * R)}
     for where in ("surface", "axis"):
         for sw in sweeps:
             model = Rod3D(rod, n, control="load", end_load=F, friction_at=where, friction_sweeps=sw)
@@ -250,5 +255,6 @@ def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps
             sol = run(model, q0, v0, t1, 3, 0.5 * step_limit(model, q0), stop_on_buckle=False, stop_when_stuck=False)
             d = np.asarray(sol.observables["theta"][-1] - sol.observables["theta"][0])[1:-1]
             res[f"{where}, {sw} sweeps"] = {"max_dtheta": float(np.max(np.abs(d))), "mean_dtheta": float(np.mean(d)),
-                                            "all_stuck": bool(jnp.all(sol.v_final.stuck[1:-1]))}
+                                            "all_stuck": bool(jnp.all(sol.v_final.stuck[1:-1])),
+                                            "friction_residual": float(np.max(sol.observables["friction_residual"]))}
     return res
