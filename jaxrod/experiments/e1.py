@@ -40,7 +40,7 @@ def e1(out, quick=False, progress=True):
         ax.legend(fontsize=7)
         res[f"mu={mu}"] = {"critical_force": r["critical_force"].tolist(),
                            "d_critical_mm": (r["d_critical"] * 1e3).tolist(),
-                           "buckled": r["buckled"].tolist(),
+                           "buckled": r["buckled"].tolist(), "peaked": r["peaked"].tolist(),
                            "energy_balance_max_J": r["balance"].tolist(),
                            "dt": r["dt"]}
         axes[2].plot(np.asarray(S["v0s"]) * 1e3, r["critical_force"], "o-", label=f"μ = {mu}")
@@ -57,7 +57,7 @@ def e1(out, quick=False, progress=True):
     # the runs at 1 mm/s made above when the segment counts agree
     known = {}
     if SPEED_SIZES[quick]["n3d"] == S["n"]:
-        known = {(1e-3, v0): f for v0, f, b in zip(S["v0s"], res["mu=0.0"]["critical_force"], res["mu=0.0"]["buckled"]) if b}
+        known = {(1e-3, v0): f for v0, f, b in zip(S["v0s"], res["mu=0.0"]["critical_force"], res["mu=0.0"]["peaked"]) if b}
     res["speed"] = e1_speed(out, quick, progress, known=known)
     axes[2].set_xlabel("v₀ [mm/s]")
     axes[2].set_ylabel("critical force [N]")

@@ -113,7 +113,7 @@ def e1_speed(out, quick=False, progress=True, n_field: int = 128, known=None):
                 print(f"  E1 μ = 0 against speed: 3D rod, {S['n3d']} segments, {sp * 1e3:g} mm/s, "
                       f"{len(S['v0s_3d'])} amplitudes", flush=True)
             r = e1_curves(0.0, S["v0s_3d"], n=S["n3d"], speed=sp, t1=0.8, n_save=801)
-            rod3d[sp] = np.where(r["buckled"], r["critical_force"], np.nan)
+            rod3d[sp] = np.where(r["peaked"], r["critical_force"], np.nan)
         rows += [dict(model="rod3d", n=S["n3d"], speed_m_s=sp, v0_m_s=v0, critical_force_N=f, overshoot_N=f - F0)
                  for v0, f in zip(S["v0s_3d"], rod3d[sp])]
     exps3d = [_exponent(np.array(S["rod_speeds"]), np.array([rod3d[sp][k] for sp in S["rod_speeds"]]) - F0)

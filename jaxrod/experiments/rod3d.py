@@ -57,7 +57,9 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fracti
 
     **Returns:** dict with `displacement` (n_save,) [m], `reaction` (B, n_save) at the pushed
     end [N], `critical_force` (B,) the first peak, where the linear response breaks down [N],
-    `d_critical` [m], `buckled`, `steps` (steps each member took: runs stop once buckled), `dt`.
+    `d_critical` [m], `buckled`, `peaked` (the reaction fell 10 % below its running maximum:
+    the peak is a peak, not the end of the run; a slow push can peak without reaching 1 rad),
+    `steps` (steps each member took: runs stop once buckled), `dt`.
     """
     rod = RodChannel.reference(mu) if rod is None else rod
     model = Rod3D(rod, n, control="displacement", speed=speed)
@@ -77,7 +79,7 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fracti
     first = np.where(broke.any(1), np.argmax(broke, axis=1), R.shape[1] - 1)
     i = np.array([int(np.argmax(R[k, : first[k] + 1])) for k in range(len(v0s))])
     return dict(ts=ts, displacement=D, reaction=R, critical_force=R[np.arange(len(v0s)), i],
-                d_critical=D[np.arange(len(v0s)), i], buckled=buckled, n=n, dt=_used_step(t1, n_save, dt),
+                d_critical=D[np.arange(len(v0s)), i], buckled=buckled, peaked=broke.any(1), n=n, dt=_used_step(t1, n_save, dt),
                 steps=np.asarray(sol.n_steps), balance=np.asarray(jnp.max(jnp.abs(sol.energy_balance), axis=1)))
 
 
