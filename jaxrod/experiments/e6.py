@@ -77,12 +77,15 @@ def e6(out, quick, progress):
     # rolling: the reduced models' assumption), to separate rolling from everything else
     res["crosscheck_critical_velocity"] = crosscheck_critical_velocity(
         S["dFs"], n=S["n_cross"], progress=progress)
+    # at the centre line only at 20 N, where the two placements once disagreed (a defect of the
+    # contact-point friction since fixed: see docs/physics.md, the friction pass)
+    axis_dFs = tuple(dF for dF in S["dFs"] if dF == 20.0)
     res["crosscheck_critical_velocity_axis_friction"] = crosscheck_critical_velocity(
-        S["dFs"], n=S["n_cross"], progress=progress, friction_at="axis")
+        axis_dFs, n=S["n_cross"], progress=progress, friction_at="axis")
     if S["dFs"]:
         if progress:
             print("  rolling check: a rod the field model calls stuck, friction at the surface and the axis", flush=True)
-        res["rolling_check"] = rolling_check(max(S["dFs"]), n=S["n_cross"])
+        res["rolling_check"] = rolling_check(20.0, n=S["n_cross"])
     fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "e6_spectra.png"), dpi=130)

@@ -26,7 +26,7 @@ SIZES = {
     "tiny": dict(n=12, v0s=(10e-3, 30e-3), conv=(12,), t1=0.4, n_save=201, dFs=(), n_cross=12),
     True: dict(n=40, v0s=(5e-3, 15e-3, 30e-3), conv=(20, 40, 60), t1=0.6, n_save=601, dFs=(1.0, 5.0, 20.0), n_cross=40),
     False: dict(n=60, v0s=(5e-3, 10e-3, 15e-3, 20e-3, 25e-3, 30e-3), conv=(30, 60, 120), t1=0.8,
-                n_save=801, dFs=(1.0, 5.0, 20.0), n_cross=60),
+                n_save=801, dFs=(1.0, 5.0, 20.0, 60.0), n_cross=60),
 }
 
 
