@@ -39,6 +39,7 @@ __all__ = [
     "critical_load_position",
     "critical_loads",
     "min_critical_load",
+    "held_end_amplitude",
 ]
 
 
@@ -286,3 +287,12 @@ def min_critical_load(
     loads = critical_loads(rod, n_modes, amplitude, kind, mu, planar)
     i = jnp.argmin(loads)
     return loads[i], i + 1
+
+
+def held_end_amplitude(rod: RodChannel, dF: ArrayLike, m: ArrayLike = 6) -> Float[Array, "..."]:
+    """A_held = (2/(R ω_m)) √(ΔF/EA) [rad]: the amplitude of mode `m` whose end shortening
+    ∫½y'² ds = (R A ω_m)² L/4 relieves a load excess ΔF = F − F⁰ [N] of a rod whose ends are
+    held (EA·shortening/L = ΔF). A rod with held ends that buckles settles near this amplitude
+    instead of growing without bound (0.38 rad at ΔF = 5 N for the reference rod), so a fixed
+    0.5 rad threshold cannot tell buckled from stable there."""
+    return 2.0 / (rod.R * wavenumber(rod, m)) * jnp.sqrt(jnp.maximum(_f(dF), 0.0) / rod.EA)

@@ -164,3 +164,17 @@ def test_intercept_gradients_match_finite_differences(k, f):
     np.testing.assert_allclose(g[1], 1 / math.sqrt(-k), rtol=1e-12)  # analytic
     gp = jax.grad(th.position_intercept, argnums=(0, 1))(k, f)
     np.testing.assert_allclose(gp[0], f / k**2, rtol=1e-12)
+
+
+def test_held_end_amplitude_takes_up_the_load_excess():
+    """EA/L times the end shortening ∫½y'² of mode m at the held-end amplitude equals ΔF
+    (trapezoidal quadrature of the shortening, independent of the closed form)."""
+    rod = jr.RodChannel.reference(0.3)
+    for dF, m in ((5.0, 6), (20.0, 12)):
+        A = float(jr.theory.held_end_amplitude(rod, dF, m))
+        s = np.linspace(0.0, float(rod.L), 20001)
+        k = m * np.pi / float(rod.L)
+        slope = float(rod.R) * A * k * np.cos(k * s)
+        shortening = np.trapezoid(0.5 * slope**2, s)
+        assert float(rod.EA) * shortening / float(rod.L) == pytest.approx(dF, rel=1e-6)
+    assert float(jr.theory.held_end_amplitude(rod, 5.0)) == pytest.approx(0.376, abs=0.002)
