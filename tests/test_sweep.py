@@ -254,3 +254,20 @@ def test_pool_arguments_are_checked():
         sweep(SPEC, INPUTS, scheduling="fifo", progress=False)
     with pytest.raises(ValueError, match="lanes = 0"):
         sweep(SPEC, INPUTS, lanes=0, progress=False)
+
+
+def test_to_xarray_labels_the_grid():
+    """A grid sweep as an xarray Dataset: the swept names are its dimensions, in grid order, with
+    their values as coordinates; each output is a variable of the grid's shape, equal to
+    `grid(name)`; a zipped sweep has one `member` dimension."""
+    res = sweep(SPEC, INPUTS, seed=3, chunk_size=5, progress=False)
+    ds = res.to_xarray()
+    assert tuple(ds.sizes) == ("dF", "amplitude", "realization") and tuple(ds.sizes.values()) == res.shape == (2, 2, 3)
+    np.testing.assert_array_equal(ds["amplitude"].values, [0.005, 0.05])
+    for k in ("buckled", "max_theta", "result", "index"):
+        np.testing.assert_array_equal(ds[k].values, res.grid(k))
+    # one member picked by label
+    i = int(ds["index"].sel(dF=20.0, amplitude=0.05, realization=1))
+    assert bool(ds["buckled"].sel(dF=20.0, amplitude=0.05, realization=1)) == bool(res.outputs["buckled"][i])
+    z = sweep(SPEC, {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05]}, combine="zip", seed=3, progress=False).to_xarray()
+    assert tuple(z.sizes) == ("member",) and z.sizes["member"] == 2

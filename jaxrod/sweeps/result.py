@@ -79,6 +79,36 @@ class SweepResult:
         out.update(p=np.where(n > 0, k / np.maximum(n, 1), np.nan), lo=lo, hi=hi, n=n, buckled=k)
         return out
 
+    def to_xarray(self):
+        """The result as a labelled `xarray.Dataset` (needs xarray: `pip install 'jaxrod[xarray]'`).
+
+        A grid sweep (`combine="grid"`) has the swept names as dimensions, in grid-axis order,
+        with their values as coordinates; every output, and every input that is not an axis
+        (`index`), is a variable on those dimensions. A zipped sweep has one `member`
+        dimension with the inputs as coordinates. `attrs` hold the sweep's metadata (nested
+        values as JSON text)."""
+        try:
+            import xarray as xr
+        except ImportError:
+            raise ImportError("SweepResult.to_xarray needs xarray: pip install 'jaxrod[xarray]'") from None
+        import json
+
+        if self.names and len(self.shape) == len(self.names):
+            dims = tuple(self.names)
+            coords = {}
+            for ax, name in enumerate(dims):
+                at = [0] * len(dims)
+                at[ax] = slice(None)
+                coords[name] = self.grid(name)[tuple(at)]
+            data = {k: (dims, self.grid(k)) for k in self.outputs}
+            data.update({k: (dims, self.grid(k)) for k in self.inputs if k not in dims})
+        else:
+            coords = {k: ("member", v) for k, v in self.inputs.items()}
+            data = {k: ("member", v) for k, v in self.outputs.items()}
+        attrs = {k: v if isinstance(v, (str, int, float)) else json.dumps(v, default=str)
+                 for k, v in self.meta.items() if not k.startswith("_")}
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
     @classmethod
     def load(cls, path: str) -> SweepResult:
         """Load a sweep written with `sweep(..., path=path)` (finished chunks only)."""
