@@ -54,6 +54,8 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--n-save", dest="n_save", type=_positive_int, default=2001, help="saved times (default 2001)")
     sm.add_argument("--json", action="store_true", help="print one JSON object")
     sm.add_argument("--plot", default=None, help="write theta(s,t) and the modal spectrum to this PNG")
+    sm.add_argument("--export", default=None, metavar="DIR",
+                    help="rod3d: write a ParaView time series (DIR/rod.pvd, one .vtu per save) and DIR/rod.gif")
     _add_rod_options(sm)
     sm.set_defaults(func=_cmd_simulate)
 

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
 
-from ._common import _fail, _rod_from_args, _json_number
+from ._common import _check_writable, _fail, _json_number, _rod_from_args
 
 
 def _cmd_simulate(args) -> int:
@@ -109,11 +110,22 @@ def _simulate_rod3d(args, rod) -> int:
     threshold = 0.5
     if args.control == "force" and args.dF > 0:
         threshold = min(0.5, 0.5 * float(theory.held_end_amplitude(rod, args.dF, args.mode)))
+    if args.export is not None:
+        _check_writable("--export", args.export)
     try:
         sol = run(model, q0, v0, args.t1, n_save, dt, threshold=threshold, stop_on_buckle=args.control != "displacement",
-                  stop_when_stuck=args.control != "displacement")
+                  stop_when_stuck=args.control != "displacement", save_state=args.export is not None)
     except ValueError as err:
         _fail(str(err))
+    if args.export is not None:
+        from ..figures.export3d import animate, write_vtk
+
+        try:
+            every = max(1, n_save // 200)  # at most ~200 frames
+            write_vtk(sol, model, args.export)
+            animate(sol, model, os.path.join(args.export, "rod.gif"), every=every)
+        except ImportError as err:
+            _fail(f"argument --export: {err}")
     R = np.asarray(sol.observables["reaction"][:, 1])
     end_x = np.asarray(sol.observables["end_x"])
     i = int(np.argmax(R))
