@@ -166,14 +166,16 @@ def e6_full(out, quick=False, progress=True):
     return res
 
 
-def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, progress=True, friction_at="surface"):
+def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, progress=True, friction_at="surface",
+                                 ends="pinned"):
     """The critical sine mode-6 velocity v₀* [m/s] at each ΔF from the 3D rod under a dead load
     F = F⁰₆ + ΔF (as the field model) and from the field model (boundary search). The 3D value
     is bracketed by `rounds` vmapped grids of `grid` amplitudes, each zooming into the
     bracket of the previous (buckled: θ > 0.5 rad within `t1`; runs stop when stuck). The
     bracket is [largest stable, next amplitude] (every tested amplitude above it buckled);
     outcomes that are not monotonic in v₀ (a buckled amplitude below a stable one) are
-    reported, with the smallest buckled amplitude. `friction_at` is passed to [`Rod3D`][].
+    reported, with the smallest buckled amplitude. `friction_at` and `ends` are passed to
+    [`Rod3D`][].
 
     **Returns:** list of dicts with `dF`, `field`, `rod3d`, `rod3d_bracket`, `monotonic`,
     `smallest_buckled`, `smallest_tested`, `every_tested_amplitude_buckled`.
@@ -188,7 +190,7 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
         r, _ = critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
         t_field = time.perf_counter() - t0
         v_field = float(r.root)
-        model = Rod3D(rod, n, control="load", end_load=F0 + dF, friction_at=friction_at)
+        model = Rod3D(rod, n, control="load", end_load=F0 + dF, friction_at=friction_at, ends=ends)
         lo, hi = 0.4 * v_field, 2.5 * v_field
         bracketed, tested = False, {}
         for k in range(rounds):
@@ -219,7 +221,7 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
                         monotonic=bool(np.all(np.diff(bs.astype(int)) >= 0)),
                         smallest_buckled=float(vs[bs][0]) if bs.any() else None,
                         every_tested_amplitude_buckled=bool(bs.all()),
-                        smallest_tested=float(vs[0]), n_segments=n, friction_at=friction_at,
+                        smallest_tested=float(vs[0]), n_segments=n, friction_at=friction_at, ends=ends,
                         seconds_field=round(t_field, 2), seconds_rod3d=round(time.perf_counter() - t0 - t_field, 1),
                         rod3d_runs=len(tested)))
     return out

@@ -53,7 +53,8 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     cl, cr = node_weights(model)
     Jinv = 1.0 / model.inertia
     m = model.mass
-    Jlab_inv = jnp.einsum("jba,b,jbc->jac", Q, Jinv, Q) * (~held_s).astype(dtype)[:, None, None]  # Qᵀ diag(1/J) Q
+    Jfree = Jinv[None, :] * (~held_s).astype(dtype)  # held spin components do not turn
+    Jlab_inv = jnp.einsum("jba,jb,jbc->jac", Q, Jfree, Q)  # Qᵀ diag(1/J) Q
     pad = jnp.zeros((1, 3, 3), dtype)
     Jl = jnp.concatenate([pad, Jlab_inv], 0)  # segment i−1 of node i
     Jr = jnp.concatenate([Jlab_inv, pad], 0)  # segment i of node i
@@ -77,7 +78,7 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         v = v + free_n * P / m[:, None]
         torque = jnp.cross(rc, P)  # lab torque impulse at the node
         tseg = cr[:-1, None] * torque[:-1] + cl[1:, None] * torque[1:]
-        w = w + jnp.where(held_s[:, None], 0.0, Jinv[None, :] * jnp.einsum("jab,jb->ja", Q, tseg))
+        w = w + Jfree * jnp.einsum("jab,jb->ja", Q, tseg)
         return v, w
 
     # warm start: last pass's forces, within this pass's bounds

@@ -46,8 +46,11 @@ class Rod3D(AbstractModel):
     - `rod`: the [`jaxrod.RodChannel`][] (material, section, clearance R, μ_s, μ_d).
     - `n_segments`: number of segments n ≥ 4 (static).
     - `channel`: with the channel wall (`True`) or a free rod in space (`False`, static).
-    - `ends`: `"pinned"` (end nodes held, rotations free), `"clamped"` (end nodes held and end
-      segments' rotations held) or `"free"` (static).
+    - `ends`: `"pinned"` (end nodes held, rotations free: the rod may spin about its axis at
+      the ends, so under a high load its interior can roll sideways as a whole), `"fork"` (end
+      nodes held and the end segments' spin about their axis held, bending rotations free: a
+      fork support, the reduced models' pinned ends without rolling of the whole rod),
+      `"clamped"` (end nodes held and end segments' rotations held) or `"free"` (static).
     - `control`: `"force"` (ends held where the initial state puts them: a pre-compressed rod
       keeps its axial force until it deforms, E3), `"load"` (a dead load: node n free along x
       and pushed by the constant force `end_load`, as in the reduced models) or
@@ -118,8 +121,8 @@ class Rod3D(AbstractModel):
     ):
         if not (isinstance(n_segments, (int, np.integer)) and n_segments >= 4):
             raise ValueError(f"Rod3D.n_segments = {n_segments!r} is invalid: expected an int >= 4.")
-        if ends not in ("pinned", "clamped", "free"):
-            raise ValueError(f"Rod3D.ends = {ends!r} is invalid: expected 'pinned', 'clamped' or 'free'.")
+        if ends not in ("pinned", "fork", "clamped", "free"):
+            raise ValueError(f"Rod3D.ends = {ends!r} is invalid: expected 'pinned', 'fork', 'clamped' or 'free'.")
         if control not in ("force", "load", "displacement"):
             raise ValueError(f"Rod3D.control = {control!r} is invalid: expected 'force', 'load' or 'displacement'.")
         self.rod = rod
@@ -195,16 +198,19 @@ class Rod3D(AbstractModel):
         g = self.rod.g if self.gravity else 0.0 * self.rod.g
         return jnp.stack([0.0 * g, 0.0 * g, -g])
 
-    def held(self) -> tuple[Bool[Array, "n1 3"], Bool[Array, " n"]]:
-        """Which node velocity components are prescribed, and which segments' rotations."""
+    def held(self) -> tuple[Bool[Array, "n1 3"], Bool[Array, "n 3"]]:
+        """Which node velocity components are prescribed, and which segment spin components
+        (material frame) are held at zero."""
         nodes = np.zeros((self.n + 1, 3), bool)
-        segs = np.zeros(self.n, bool)
+        segs = np.zeros((self.n, 3), bool)
         if self.ends != "free":
             nodes[[0, -1]] = True
             if self.control == "load":
                 nodes[-1, 0] = False
         if self.ends == "clamped":
             segs[[0, -1]] = True
+        elif self.ends == "fork":
+            segs[[0, -1], 2] = True  # the spin about d₃
         return jnp.asarray(nodes), jnp.asarray(segs)
 
     def prescribed_velocity(self) -> Float[Array, "n1 3"]:
@@ -370,7 +376,7 @@ class Rod3D(AbstractModel):
     def constrain(self, v, w):
         held_n, held_s = self.held()
         v = jnp.where(held_n, self.prescribed_velocity(), v)
-        w = jnp.where(held_s[:, None], 0.0, w)
+        w = jnp.where(held_s, 0.0, w)
         return v, w
 
     def max_frequency(self, q: Rod3DPosition | None = None, iters: int = 80) -> Float[Array, ""]:

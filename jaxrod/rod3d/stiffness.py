@@ -21,7 +21,7 @@ def max_frequency(model, q, iters: int = 80) -> Float[Array, ""]:
     held_n, held_s = model.held()
     dtype = state.x.dtype
     free_n = jnp.where(held_n, 0.0, 1.0).astype(dtype)
-    free_s = jnp.where(jnp.broadcast_to(held_s[:, None], (model.n, 3)), 0.0, 1.0).astype(dtype)
+    free_s = jnp.where(held_s, 0.0, 1.0).astype(dtype)
     mass = model.mass[:, None] * jnp.ones((1, 3), dtype)
     inert = model.inertia[None, :] * jnp.ones((model.n, 1), dtype)
 
