@@ -167,8 +167,9 @@ def _map_rows(results: dict) -> list[dict]:
     return rows
 
 
-def plot_maps(results: dict, summary: dict, path: str) -> None:
-    """One panel per μ: stable (circles) / buckled (crosses), P6 theory, fitted boundary."""
+def plot_maps(results: dict, summary: dict, path: str | None = None):
+    """One panel per μ: stable (circles) / buckled (crosses), P6 theory, fitted boundary.
+    **Returns:** the `matplotlib.figure.Figure`; also written as a PNG to `path` when given."""
 
     mus = list(results)
     fig, axes = subplots(1, len(mus), figsize=(6.2 * len(mus), 5.0), squeeze=False)
@@ -211,4 +212,6 @@ def plot_maps(results: dict, summary: dict, path: str) -> None:
     fig.suptitle(f"Stability map, reference rod, {summary['model']} model (n = {summary['n']}, "
                  f"dt = {summary['dt']:.2e} s, horizon {summary['t1']:g} s)", fontsize=11)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    if path is not None:
+        fig.savefig(path, dpi=130)
+    return fig

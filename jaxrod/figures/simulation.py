@@ -8,9 +8,10 @@ from ..modal import modal_spectrum
 from ..output import subplots
 
 
-def plot_simulation(scene, sol, path: str) -> None:
-    """Write a PNG with θ(s,t) (left) and the modal power spectrum at the start, the middle and
-    the end of the run (right)."""
+def plot_simulation(scene, sol, path: str | None = None):
+    """θ(s,t) (left) and the modal power spectrum at the start, the middle and the end of the
+    run (right). **Returns:** the `matplotlib.figure.Figure` (a notebook shows it inline); also
+    written as a PNG to `path` when given."""
 
     s, theta = (np.asarray(x) for x in scene.field_of(sol.q))
     ts = np.asarray(sol.ts)
@@ -43,7 +44,9 @@ def plot_simulation(scene, sol, path: str) -> None:
     if ax1.get_legend_handles_labels()[0]:
         ax1.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+    return fig
 
 
 def _resample(s, theta, L, n=128):
