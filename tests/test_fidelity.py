@@ -95,7 +95,7 @@ def test_the_3d_rod_gets_the_same_modes_at_its_nodes():
     scene is refused with a one-line error."""
     p = RandomVelocity(0.015, KEY)
     c = _modes(p.fields(jr.FieldModel.from_rod(ROD, 384, dF=5.0))[1], 12)
-    sc = jr.scene.Scene(ROD, 5.0, p, "rod3d", n=40)
+    sc = jr.scene.Scene(ROD, 5.0, p, "rod3d", n=40, dt=1e-6)  # dt given: no step-limit compilation
     q, v = sc.initial_state()
     lateral = np.asarray(v.v[1:-1, 1])  # on the straight rod at the bottom, along y
     np.testing.assert_allclose(_modes(jnp.asarray(lateral), 12), c, rtol=0, atol=1e-12 * 0.015)

@@ -108,10 +108,13 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         return v, w, stuck, p_acc, change / scale, k + 1
 
     def more(carry):
-        return (carry[-1] < model.friction_sweeps) & (carry[-2] > model.friction_tol)
+        k = carry[-1]
+        return (k == 0) | ((k < model.friction_sweeps) & (carry[-2] > model.friction_tol))
 
-    carry = sweep((v, w, stuck, p0, jnp.zeros((), dtype), 0))
-    if model.friction_sweeps > 1:  # a loop, not an unrolled copy per sweep (compile time)
+    carry = (v, w, stuck, p0, jnp.zeros((), dtype), 0)
+    if model.friction_sweeps == 1:  # no loop: reverse-mode differentiable
+        carry = sweep(carry)
+    else:  # one compiled copy of the sweep, in the loop (compile time)
         carry = jax.lax.while_loop(more, sweep, carry)
     v, w, stuck, p_acc, residual, _ = carry
     force = p_acc / jnp.where(h > 0, h, 1.0)
