@@ -77,6 +77,7 @@ def test_console_command_is_installed():
     assert json.loads(res.stdout)["critical_mode"] == 6
 
 
+@pytest.mark.slow  # 14 s; the default suite checks the same agreement through reproduce e2 (tiny)
 def test_phase_figure(tmp_path):
     from jaxrod.figures import phase_portraits
 

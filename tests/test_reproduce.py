@@ -33,6 +33,9 @@ def test_exponents_are_finite_and_frictionless_loads_vanish(results):
     _, res = results
     assert math.isfinite(res["e3"]["boundary_exponent"]) and res["e3"]["boundary_exponent"] < 0
     assert res["e3"]["frictionless_buckles_for_every_dF_gt_0"] is True
+    # the phase portraits' grid classification agrees with the theory's stable zones
+    agreement = res["e2"]["grid_agreement_simulated_vs_analytic"]
+    assert len(agreement) == 6 and min(agreement.values()) >= 0.95, agreement
     for label, entry in res["e4"].items():
         if not isinstance(entry, dict):
             continue
