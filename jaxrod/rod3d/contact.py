@@ -84,7 +84,8 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     # warm start: last pass's forces, within this pass's bounds
     p0 = jnp.where(in_contact[:, None], force * h, 0.0)
     cap = jnp.where(stuck, bound_s, bound_d)
-    p0 = p0 * jnp.minimum(1.0, cap / jnp.maximum(safe_norm(p0), jnp.finfo(dtype).tiny))[:, None]
+    norm = safe_norm(p0)
+    p0 = p0 * jnp.where(norm > cap, cap / jnp.where(norm > 0, norm, 1.0), 1.0)[:, None]  # no 0·∞ in a jvp
     v, w = apply(v, w, p0)
 
     def sweep(carry):
@@ -111,11 +112,18 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         k = carry[-1]
         return (k == 0) | ((k < model.friction_sweeps) & (carry[-2] > model.friction_tol))
 
+    def body(carry):
+        # a member that has converged keeps its impulses while others of a vmapped batch sweep
+        # on, so a batch member equals its single run
+        new = sweep(carry)
+        done = ~more(carry)
+        return jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), carry, new)
+
     carry = (v, w, stuck, p0, jnp.zeros((), dtype), 0)
     if model.friction_sweeps == 1:  # no loop: reverse-mode differentiable
         carry = sweep(carry)
     else:  # one compiled copy of the sweep, in the loop (compile time)
-        carry = jax.lax.while_loop(more, sweep, carry)
+        carry = jax.lax.while_loop(more, body, carry)
     v, w, stuck, p_acc, residual, _ = carry
     force = p_acc / jnp.where(h > 0, h, 1.0)
     return v, w, stuck, force, jnp.where(jnp.any(in_contact), residual, 0.0)
