@@ -13,7 +13,7 @@ ROD = RodChannel.reference(0.0)
 
 def test_the_frictionless_overshoot_follows_the_delayed_bifurcation_law():
     F0 = float(theory.reference_load(ROD))
-    speeds = np.array([1e-3, 3e-4, 1e-4])
+    speeds = np.array([1e-3, 1e-4])  # each speed compiles its own run (t1 is static)
     fc = np.array([field_ramp_force(ROD, s, (5e-3, 30e-3), n=64) for s in speeds])  # (speeds, v0s)
     over = fc - F0
     print("F_c [N]:", fc.tolist())

@@ -161,6 +161,7 @@ def _twist_figure(rod, margin, k=12 * np.pi / 3.0):
     return r**2 * f_hat * float(rod.L) / (2 * float(rod.GJ) * k * float(rod.R))
 
 
+@pytest.mark.slow  # 12-17 s of 3D compilation; the contact-point case below stays in the default suite
 def test_a_compressed_rod_inside_the_friction_cone_holds_with_centre_line_friction():
     """Friction at the centre line (sliding only): the held rod does not move at all."""
     _, m, _, s0 = _held_case(30, "axis")
