@@ -20,7 +20,8 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 from ..models.base import AbstractModel
-from ..params import RodChannel, _concrete
+from ..params import RodChannel
+from ._checks import check_arguments
 from .._numerics import float_leaf
 from . import energy
 from .contact import friction_pass
@@ -121,10 +122,6 @@ class Rod3D(AbstractModel):
     ):
         if not (isinstance(n_segments, (int, np.integer)) and n_segments >= 4):
             raise ValueError(f"Rod3D.n_segments = {n_segments!r} is invalid: expected an int >= 4.")
-        if ends not in ("pinned", "fork", "clamped", "free"):
-            raise ValueError(f"Rod3D.ends = {ends!r} is invalid: expected 'pinned', 'fork', 'clamped' or 'free'.")
-        if control not in ("force", "load", "displacement"):
-            raise ValueError(f"Rod3D.control = {control!r} is invalid: expected 'force', 'load' or 'displacement'.")
         self.rod = rod
         self.n_segments = int(n_segments)
         self.channel = bool(channel)
@@ -146,26 +143,12 @@ class Rod3D(AbstractModel):
             rotary_scale = jnp.maximum(1.0, 4.0 * kappa * (rod.G / rod.E) * (l0 / rod.d) ** 2)
         self.rotary_scale = float_leaf(rotary_scale)
         self.body_force = float_leaf(body_force)
-        if not (isinstance(friction_sweeps, int) and friction_sweeps >= 1):
-            raise ValueError(f"Rod3D.friction_sweeps = {friction_sweeps!r} is invalid: expected an int >= 1.")
         self.friction_sweeps = friction_sweeps
         self.friction_tol = float_leaf(friction_tol)
-        if friction_at not in ("surface", "axis"):
-            raise ValueError(f"Rod3D.friction_at = {friction_at!r} is invalid: expected 'surface' or 'axis'.")
         self.friction_at = friction_at
-        v = _concrete(self.speed)
-        if v is not None and not np.all(np.isfinite(v)):
-            raise ValueError(f"Rod3D.speed = {v!r} m/s is invalid: it must be finite.")
-        for name, lo in (("contact_damping", 0.0), ("damping", 0.0)):
-            v = _concrete(getattr(self, name))
-            if v is not None and not (np.all(np.isfinite(v)) and np.all(v >= lo)):
-                raise ValueError(f"Rod3D.{name} = {v!r} is invalid: it must be finite and >= {lo}.")
-        v = _concrete(self.contact_stiffness)
-        if v is not None and not (np.all(np.isfinite(v)) and np.all(v > 0)):
-            raise ValueError(f"Rod3D.contact_stiffness = {v!r} N/m^2.5 is invalid: it must be finite and > 0.")
-        v = _concrete(self.rotary_scale)
-        if v is not None and not (np.all(np.isfinite(v)) and np.all(v >= 1.0)):
-            raise ValueError(f"Rod3D.rotary_scale = {v!r} is invalid: it must be finite and >= 1.")
+
+    def __check_init__(self):
+        check_arguments(self)
 
     # -- discretisation --------------------------------------------------------------------
     @property
