@@ -94,3 +94,22 @@ def device_info(dtype="float64") -> dict:
     d = jax.devices()[0]
     kind = d.device_kind if d.platform != "cpu" else f"cpu ({os.cpu_count()} cores)"
     return dict(device=kind, jax=jax.__version__, dtype=dtype)
+
+
+def run_or_replot(description: str, run, replot, replot_help: str = "redraw the figure from the CSV") -> None:
+    """The command line of a work–precision script: `--quick` (about a minute: fewer
+    configurations) and `--replot` (`replot(quick)` only); otherwise `run(quick, device_info())`,
+    timed."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--quick", action="store_true", help="about a minute: fewer configurations")
+    ap.add_argument("--replot", action="store_true", help=replot_help)
+    args = ap.parse_args()
+    os.makedirs(RESULTS, exist_ok=True)
+    if args.replot:
+        replot(args.quick)
+        return
+    t0 = time.perf_counter()
+    run(args.quick, device_info())
+    print(f"\ntotal {time.perf_counter() - t0:.0f} s")

@@ -266,7 +266,7 @@ def main():
         best = None
         for kind, n in cands:
             ans, c, r = results[(kind, n)]
-            mode_ok = mode_err = None
+            mode_ok = None
             if "labels" in ans:
                 err = 1.0 - float(np.mean(ans["labels"] == ref_ans["labels"]))
                 val = f"{int(ans['labels'].sum())}/{ans['labels'].size} buckled"

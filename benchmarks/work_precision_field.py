@@ -26,7 +26,6 @@ Writes benchmarks/results/work_precision_field.{csv,png} (the `--quick` run writ
 
 from __future__ import annotations
 
-import argparse
 import os
 import time
 
@@ -39,7 +38,7 @@ import numpy as np  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 
-from _common import RESULTS as OUT, device_info, load_rows, timed, write_csv  # noqa: E402
+from _common import RESULTS as OUT, run_or_replot, load_rows, timed, write_csv  # noqa: E402
 
 DF = 5.0  # N above F0_6
 ROD = jr.RodChannel.reference(mu=0.3)
@@ -222,17 +221,7 @@ def replot(quick):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true", help="about a minute: fewer configurations")
-    ap.add_argument("--replot", action="store_true", help="redraw the figure from the CSV")
-    args = ap.parse_args()
-    os.makedirs(OUT, exist_ok=True)
-    if args.replot:
-        replot(args.quick)
-        return
-    t0 = time.perf_counter()
-    run_field(args.quick, device_info())
-    print(f"\ntotal {time.perf_counter() - t0:.0f} s")
+    run_or_replot(__doc__.split("\n")[0], run_field, replot)
 
 
 if __name__ == "__main__":

@@ -32,10 +32,8 @@ prints the summary.
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
-import time
 
 import jax
 
@@ -49,7 +47,7 @@ import optimistix as optx  # noqa: E402
 import jaxrod as jr  # noqa: E402
 from jaxrod.boundary import safeguarded_newton, single_mode_indicator  # noqa: E402
 
-from _common import RESULTS as OUT, device_info, load_rows, timed, write_csv  # noqa: E402
+from _common import RESULTS as OUT, run_or_replot, load_rows, timed, write_csv  # noqa: E402
 
 DF = 5.0  # N above F0_6
 TARGET = 1e-6  # the critical-velocity target
@@ -377,17 +375,7 @@ def replot(quick):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true", help="about a minute: fewer configurations")
-    ap.add_argument("--replot", action="store_true", help="redraw the figure from the CSV, print the summary")
-    args = ap.parse_args()
-    os.makedirs(OUT, exist_ok=True)
-    if args.replot:
-        replot(args.quick)
-        return
-    t0 = time.perf_counter()
-    run_single_mode(args.quick, device_info())
-    print(f"\ntotal {time.perf_counter() - t0:.0f} s")
+    run_or_replot(__doc__.split("\n")[0], run_single_mode, replot, "redraw the figure from the CSV, print the summary")
 
 
 if __name__ == "__main__":
