@@ -82,9 +82,17 @@ def stability_map(
     ([`jaxrod.boundary.boundary_curve`][] at the map's n and dt, to `curve_rtol`; `None`: not)
     and drawn over the grid.
 
+    Under `jax.distributed` each process runs its share of every map's members ([`jaxrod.sweep`][]),
+    all of them return the same summary, and process 0 alone writes the files and shows progress
+    (the searched boundary is not split: every process searches it alike).
+
     **Returns:** the summary (per μ: boundary points, fitted exponent ± standard error, the
     largest stable ΔF/F⁰_cr seen, counts), also written to `map.json`.
     """
+    import jax
+
+    main = jax.process_index() == 0
+    progress = progress and main
     dF = np.asarray(dF, float)
     v0 = np.asarray(v0, float)
     results = {}
@@ -99,7 +107,7 @@ def stability_map(
             summary["maps"][f"{mu:g}"].update(_searched(res, dF, float(mu), model, mode, t1, curve_rtol, progress))
     summary["n"] = results[mus[0]].meta["n"]
     summary["dt"] = results[mus[0]].meta["dt"]
-    if out is not None:
+    if out is not None and main:
         os.makedirs(out, exist_ok=True)
         write_csv(os.path.join(out, "map.csv"), _map_rows(results))
         with open(os.path.join(out, "map.json"), "w") as fh:

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from ._common import _Parser, _check_writable, _fail, _finite_float, _add_rod_options, _positive_int, _range_spec, _rtol, _use_all_cpu_cores
+from ._distributed import _add_distributed_options, _start_distributed
 from .theory import _cmd_theory
 from .simulate import _cmd_simulate
 from .map import _cmd_map
@@ -72,6 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
     mp.add_argument("--no-curve", dest="no_curve", action="store_true",
                     help="do not search the boundary at every load (drawn over the grid, rtol 1e-3)")
+    _add_distributed_options(mp)
     mp.set_defaults(func=_cmd_map)
 
     bd = sub.add_parser("boundary", help="critical sine velocity v0*(dF) by root search")
@@ -145,6 +147,8 @@ def _resolve_auto_model(args) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if hasattr(args, "distributed"):  # first: jax.distributed starts before any JAX computation
+        _start_distributed(args)
     if getattr(args, "model", None) == "auto":
         _resolve_auto_model(args)
     if args.command in ("map", "boundary", "critical-load", "reproduce"):

@@ -20,14 +20,19 @@ def _cmd_map(args) -> int:
     if np.any(args.v0 <= 0):
         _fail(f"argument --v0: velocities must be > 0 m/s, got {float(args.v0.min())!r}.")
     mus = (0.3, 0.0) if args.mu is None else (args.mu,)
-    print(f"stability map: {args.model} model, mu = {', '.join(f'{m:g}' for m in mus)}, "
-          f"{len(args.dF)} x {len(args.v0)} grid, {jax.local_device_count()} device(s) "
-          f"({jax.devices()[0].platform})")
+    main = jax.process_index() == 0  # on several processes, process 0 reports
+    if main:
+        processes = f" x {jax.process_count()} processes" if jax.process_count() > 1 else ""
+        print(f"stability map: {args.model} model, mu = {', '.join(f'{m:g}' for m in mus)}, "
+              f"{len(args.dF)} x {len(args.v0)} grid, {jax.local_device_count()} device(s){processes} "
+              f"({jax.devices()[0].platform})")
     try:
         s = stability_map(mus, args.dF, args.v0, args.model, args.n, 6, args.out,
                           progress=not args.quiet, t1=args.t1, curve_rtol=None if args.no_curve else 1e-3)
     except ValueError as err:
         _fail(str(err))
+    if not main:
+        return 0
     print(f"n = {s['n']}, dt = {s['dt']:.3e} s; wrote {args.out}/map.png, map.csv, map.json")
     for key, m in s["maps"].items():
         line = f"  mu = {key}: {m['buckled']} buckled, {m['stable']} stable"

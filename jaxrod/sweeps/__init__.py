@@ -11,11 +11,15 @@ stopped takes the next one inside the compiled loop. Every chunk has the same sh
 one is padded with inactive members), so the sweep compiles once. With a `path`, every finished
 chunk is written atomically and a re-run skips it.
 
-**Multi-host use.** Start every process with `jax.distributed.initialize()` and give each one a
-disjoint member range (`members=range(start, stop)`, e.g. split by `jax.process_index()`) and
-its own `path`; results depend only on the global member index (random keys are
-`fold_in(key(seed), index)`), so the parts concatenate into the single-host result
-(`SweepResult.concatenate`). Within a process the chunk is sharded over its local devices.
+**Several processes.** Under `jax.distributed` (JAX's multi-controller runtime, started with
+`jaxrod.distributed.initialize` or `jax.distributed.initialize()` in every process), the same
+`sweep` call in every process splits the work: the missing chunks are dealt to the processes in
+turn, each runs its share with continuous batching on its own devices and writes its chunks to
+the shared `path`, and every process returns the whole merged result. Results depend only on the
+global member index (random keys are `fold_in(key(seed), index)`) and on the lane count (the
+default layout gives every device's share of a chunk all its `lanes`), so the merge equals a
+one-process run bit for bit, and a re-run with any number of processes completes only the
+missing chunks.
 """
 
 from .member import N_SAVE as N_SAVE

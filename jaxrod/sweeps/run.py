@@ -14,6 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..batching import DEFAULT_LANES, DEFAULT_REFILL_EVERY, run_pool
+from ..distributed import broadcast, gather, share
 from .member import _engine_member, _make_member, _static_resolution
 from .result import SweepResult, _FILL
 from .spec import OUTPUTS, PARAMETERS, SweepSpec
@@ -47,6 +48,10 @@ def _expand(inputs: Mapping[str, object], combine: str):
     else:
         raise ValueError(f"combine = {combine!r} is invalid: expected 'grid' or 'zip'.")
     return flat, shape, names
+
+
+# the default chunks of a run on several processes: about this many per process
+_CHUNKS_PER_PROCESS = 4
 
 
 def _bytes_per_member(spec: SweepSpec, n: int | None) -> int:
@@ -86,11 +91,14 @@ def sweep(
     - `seed`: base seed; member i's key is `fold_in(key(seed), i)` for its global index i, so
       results do not depend on the chunk size or the number of devices.
     - `path`: a folder for the results; finished chunks are written atomically
-      (`chunk_XXXXX.npz`, with `sweep.json` holding all metadata) and skipped on a re-run. A
-      different sweep at the same path is refused.
+      (`chunk_XXXXX.npz`, with `sweep.json` holding all metadata) and skipped on a re-run, with
+      any number of processes or devices (the chunk layout is the first run's). A different
+      sweep at the same path is refused.
     - `chunk_size`: members per chunk (rounded up to a multiple of the device count); default
-      from `memory_mb`, at most 1024 (larger chunks wait longer for their slowest member).
-    - `members`: a sub-range of global member indices to run (multi-host splitting).
+      from `memory_mb`, at most 1024 (larger chunks wait longer for their slowest member); on
+      several processes at most about a quarter of a process's share, but at least `lanes`
+      per device.
+    - `members`: a sub-range of global member indices to run.
     - `progress`: show a progress bar (members, members/s); `on_chunk(c)`: called after
       chunk c is finished (and written).
     - `scheduling`: `"pool"` (default): continuous batching — each device runs `lanes` members
@@ -99,7 +107,19 @@ def sweep(
       `"chunk"`: the whole chunk vmapped at once, running until its slowest member stops
       (kept for comparison). Results are identical either way.
 
-    **Returns:** a [`jaxrod.SweepResult`][].
+    **Several processes.** Under `jax.distributed` every process makes the same call (same
+    arguments; a shared `path` to keep the chunks); process 0 writes `sweep.json` and its view
+    of the finished chunks is everyone's; the missing chunks are dealt to the processes in turn
+    (`jaxrod.distributed.share`); each process writes its own chunks and, at the end, all of
+    them exchange their new outputs (`jaxrod.distributed.gather`, which waits for every
+    process), so every process returns the whole result. A member's outputs depend on its global
+    index and on the lane count of its device's share of the chunk (min(`lanes`, chunk
+    members per device): it sets the last bit of `max_theta` on some members), which the
+    default layout keeps at `lanes`: the merged result equals a one-process run bit for bit.
+    Every process needs the same number of local devices; `on_chunk` is called in the process
+    that ran the chunk, and only process 0 shows progress.
+
+    **Returns:** a [`jaxrod.SweepResult`][] (`meta["processes"]`: the process count).
 
     **Raises:** `ValueError` for unknown names, bad shapes or a mismatched resume — before
     any member runs. Bad *values* never raise: those members get a result code.
@@ -120,8 +140,14 @@ def sweep(
         raise ValueError(f"members = {members!r} is invalid: expected a contiguous range within [0, {total}).")
     n, dt, grid_dt = _static_resolution(spec, flat)
     n_dev = jax.local_device_count()
+    n_proc = jax.process_count()
     if chunk_size is None:
         chunk_size = int(max(1, min(1024, memory_mb * 2**20 // _bytes_per_member(spec, n))))
+        if n_proc > 1:
+            # a few chunks per process, so that the shares even out, but a full set of lanes per
+            # device (a chunk's lane count sets the last bit of some outputs: see the docstring)
+            per_process = math.ceil(len(members) / (_CHUNKS_PER_PROCESS * n_proc))
+            chunk_size = min(chunk_size, max(lanes * n_dev, per_process))
     if not (isinstance(chunk_size, int) and chunk_size >= 1):
         raise ValueError(f"chunk_size = {chunk_size!r} is invalid: expected an int >= 1.")
     if scheduling not in ("pool", "chunk"):
@@ -155,7 +181,7 @@ def sweep(
     meta["fingerprint"] = _fingerprint(meta)
     if path is not None:
         os.makedirs(path, exist_ok=True)
-        old = _read_meta(path)
+        old = _read_meta(path)  # every process checks it, so that all of them refuse alike
         if old is not None:
             if old.get("fingerprint") != meta["fingerprint"]:
                 raise ValueError(
@@ -163,9 +189,11 @@ def sweep(
                     "differ); refusing to mix results. Use another path or delete it."
                 )
             chunk_size = old["chunk_size"]
-            meta["chunk_size"] = chunk_size
-        else:
+        elif jax.process_index() == 0:
             _atomic_write(_meta_file(path), lambda f: _dump_json(meta, f), ".json")
+    if n_proc > 1:  # the chunk layout of process 0 (the one in sweep.json)
+        chunk_size = int(broadcast(np.array([chunk_size], np.int64))[0])
+    meta["chunk_size"] = chunk_size
 
     spec_json = json.dumps(spec.to_json(), sort_keys=True)
     if scheduling == "pool":
@@ -179,46 +207,64 @@ def sweep(
 
     outputs = {k: np.full(len(index), _FILL[k]) for k in OUTPUTS}
     n_chunks = math.ceil(len(index) / chunk_size)
-    bar = _progress(len(index), progress)
-    for c in range(n_chunks):
-        lo, hi = c * chunk_size, min((c + 1) * chunk_size, len(index))
-        f = _chunk_file(path, c) if path is not None else None
-        if f is not None and os.path.exists(f):
-            with np.load(f) as z:
-                for k in OUTPUTS:
-                    if k in z:
-                        outputs[k][lo:hi] = z[k]
-            bar.update(hi - lo, skipped=True)
-            continue
-        pad = chunk_size - (hi - lo)
-        # deal the chunk's members to the devices in turn (member j to device j mod D): the
-        # members of one region of a grid take similar times, so contiguous shares would leave
-        # one device with most of the work (61 % / 39 % on the default map at μ = 0.3)
-        deal = np.arange(chunk_size).reshape(-1, n_dev).T.ravel()
+    bounds = [(c * chunk_size, min((c + 1) * chunk_size, len(index))) for c in range(n_chunks)]
+    done = np.array([path is not None and os.path.exists(_chunk_file(path, c)) for c in range(n_chunks)], bool)
+    if n_proc > 1:  # one view of the folder for all processes: process 0's
+        done = broadcast(done)
+    mine = share(np.flatnonzero(~done))
+    show = progress and jax.process_index() == 0
+    ours = done.copy()
+    ours[mine] = True
+    bar = _progress(sum(hi - lo for c, (lo, hi) in enumerate(bounds) if ours[c]), show)
+    for c in np.flatnonzero(done):
+        lo, hi = bounds[c]
+        with np.load(_chunk_file(path, c)) as z:
+            for k in OUTPUTS:
+                if k in z:
+                    outputs[k][lo:hi] = z[k]
+        bar.update(hi - lo, skipped=True)
+    # a chunk runs padded to a multiple of the device count (its stored size need not be one:
+    # a resumed sweep may have other devices than the run that started it)
+    width = math.ceil(chunk_size / n_dev) * n_dev
+    # deal the chunk's members to the devices in turn (member j to device j mod D): the
+    # members of one region of a grid take similar times, so contiguous shares would leave
+    # one device with most of the work (61 % / 39 % on the default map at μ = 0.3)
+    deal = np.arange(width).reshape(-1, n_dev).T.ravel()
+    undeal = np.argsort(deal)
+    for c in mine:
+        c = int(c)
+        lo, hi = bounds[c]
+        pad = width - (hi - lo)
         params = {
             k: jax.device_put(np.pad(v[lo:hi], (0, pad), mode="edge").astype(dtype)[deal], sharding)
             for k, v in sel.items()
         }
         idx = jax.device_put(np.pad(index[lo:hi], (0, pad), mode="edge")[deal], sharding)
-        valid = jax.device_put((np.arange(chunk_size) < hi - lo)[deal], sharding)
+        valid = jax.device_put((np.arange(width) < hi - lo)[deal], sharding)
         out = jax.device_get(run_chunk(params, idx, valid, base_key))
         lane_steps += int(np.sum(out.pop("lane_steps", 0)))
-        undeal = np.argsort(deal)
         chunk_out = {k: np.asarray(out[k])[undeal][: hi - lo] for k in OUTPUTS}
         for k in OUTPUTS:
             outputs[k][lo:hi] = chunk_out[k]
-        if f is not None:
-            _atomic_write(f, lambda t: np.savez(t, **chunk_out), ".npz")
+        if path is not None:
+            _atomic_write(_chunk_file(path, c), lambda t: np.savez(t, **chunk_out), ".npz")
         bar.update(hi - lo)
         if on_chunk is not None:
             on_chunk(c)
+    if n_proc > 1:  # the other processes' chunks, by position (every process returns the whole sweep)
+        at = np.concatenate([np.arange(*bounds[c]) for c in mine] + [np.zeros(0, int)])
+        parts = gather({"at": at, "lane_steps": np.array([lane_steps]), **{k: outputs[k][at] for k in OUTPUTS}})
+        for part in parts:
+            for k in OUTPUTS:
+                outputs[k][part["at"]] = part[k]
+        lane_steps = int(sum(int(part["lane_steps"][0]) for part in parts))
     bar.close()
     inputs_out = {**sel, "index": index}
     result = SweepResult(inputs_out, outputs, tuple(meta["shape"]), names, meta)
     # how this call used its lanes (not part of the results, nor of the resume fingerprint)
     member_steps = int(np.sum(np.where(outputs["steps"] > 0, outputs["steps"], 0)))
     result.meta = {**meta, "scheduling": scheduling, "lanes": lanes, "refill_every": refill_every,
-                   "lane_steps": lane_steps, "member_steps": member_steps}
+                   "lane_steps": lane_steps, "member_steps": member_steps, "processes": n_proc}
     return result
 
 
