@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ._checks import check_args, check_figure_path
 from ._common import _Parser, _check_writable, _fail, _finite_float, _add_rod_options, _positive_int, _range_spec, _rtol, _use_all_cpu_cores
 from ._distributed import _add_distributed_options, _start_distributed
 from .theory import _cmd_theory
@@ -36,10 +37,11 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
                     help="rod3d: the full 3D rod (jaxrod.rod3d); auto: the cheapest adequate model, "
                          "from the measured table (jaxrod.model_choice)")
-    sm.add_argument("--control", choices=["force", "load", "displacement"], default="force",
-                    help="rod3d only: ends held after pre-compression (force), dead end load (load), "
+    sm.add_argument("--control", choices=["force", "load", "displacement"], default=None,
+                    help="rod3d only: ends held after pre-compression (force, the default), dead end load (load), "
                          "or one end pushed at --speed from zero load (displacement)")
-    sm.add_argument("--speed", type=_finite_float, default=1e-3, help="rod3d displacement control: pushing speed [m/s] (default 1e-3)")
+    sm.add_argument("--speed", type=_finite_float, default=None,
+                    help="rod3d displacement control only: pushing speed [m/s] (default 1e-3)")
     sm.add_argument("--dF", type=_finite_float, default=5.0, help="load above F0_m* [N] (default 5)")
     sm.add_argument("--mu", type=_finite_float, default=0.3, help="friction coefficient (default 0.3)")
     sm.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
@@ -146,17 +148,22 @@ def _resolve_auto_model(args) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command. Every error a user can cause ends in one line on stderr naming the
+    option and exit code 2; values that need no computation are checked before any work."""
     args = build_parser().parse_args(argv)
+    check_args(args)
     if hasattr(args, "distributed"):  # first: jax.distributed starts before any JAX computation
         _start_distributed(args)
     if getattr(args, "model", None) == "auto":
         _resolve_auto_model(args)
     if args.command in ("map", "boundary", "critical-load", "reproduce"):
         _use_all_cpu_cores()
-    if getattr(args, "out", None):
-        _check_writable("--out", args.out)
     if getattr(args, "plot", None):
+        check_figure_path("--plot", args.plot)
         _check_writable("--plot", args.plot, folder=False)
+    for option in ("out", "export"):
+        if getattr(args, option, None):
+            _check_writable(f"--{option}", getattr(args, option))
     try:
         return args.func(args)
     except OSError as err:  # a file system error mid-run: one line, never a traceback

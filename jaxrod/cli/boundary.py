@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 
+from ._checks import MIN_DF_BRACKET
 from ._common import _fail, _rod_from_args, _write_rows, _plot_curve
 
 
@@ -20,13 +21,12 @@ def _cmd_boundary(args) -> int:
     from ..boundary import ROOT_RESULTS
     from ..stability_map import fit_power_law, theory_boundary
 
-    if args.mu < 0:
-        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
-    if np.any(args.dF <= 0):
-        _fail("argument --dF: loads above F0_6 must be > 0 N for a boundary to exist.")
-    rod = _rod_from_args(args, args.mu)
-    res, sens = bd.boundary_curve(rod, args.dF, model=args.model, n=args.n, bracket=(1e-5, 2.0), rtol=args.rtol,
-                                  method=args.method, progress=not (args.quiet or args.json))
+    rod = _rod_from_args(args, args.mu)  # --mu, --dF, --n and --method were checked by cli._checks
+    try:
+        res, sens = bd.boundary_curve(rod, args.dF, model=args.model, n=args.n, bracket=(1e-5, 2.0), rtol=args.rtol,
+                                      method=args.method, progress=not (args.quiet or args.json))
+    except ValueError as err:
+        _fail(str(err))
     v = np.asarray(res.root)
     ok = np.asarray(res.result) == 0
     rows = [dict(dF=float(f), v0_star=float(x) if o else None, evaluations=int(e), result=ROOT_RESULTS.messages[int(r)],
@@ -64,14 +64,13 @@ def _cmd_critical_load(args) -> int:
     from ..boundary import ROOT_RESULTS
     from ..stability_map import fit_power_law
 
-    if np.any(args.mu <= 0):
-        _fail("argument --mu: friction coefficients must be > 0 (no frictional boundary at mu = 0).")
-    if args.amplitude <= 0:
-        _fail(f"argument --amplitude: {args.amplitude!r} is invalid: expected > 0.")
-    R = args.realizations
-    res, _ = bd.critical_load_curve(args.mu, args.amplitude, perturbation=args.perturbation, realizations=R,
-                                    seed=args.seed, model=args.model, n=args.n, rtol=args.rtol,
-                                    bracket=(1e-3, args.max_dF), method=args.method)
+    R = args.realizations  # --mu, --amplitude, --max-dF, --n and --method were checked by cli._checks
+    try:
+        res, _ = bd.critical_load_curve(args.mu, args.amplitude, perturbation=args.perturbation, realizations=R,
+                                        seed=args.seed, model=args.model, n=args.n, rtol=args.rtol,
+                                        bracket=(MIN_DF_BRACKET, args.max_dF), method=args.method)
+    except ValueError as err:
+        _fail(str(err))
     F = np.asarray(res.root)
     ok = np.asarray(res.result) == 0
     rows = []

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 
-from ._common import _fail, _rod_from_args, _json_number
+from ._common import _rod_from_args, _json_number
 
 
 def _cmd_theory(args) -> int:
@@ -14,11 +14,7 @@ def _cmd_theory(args) -> int:
     jax.config.update("jax_enable_x64", True)
     from .. import theory as th
 
-    if args.mu < 0:
-        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
-    if args.mode is not None and args.mode < 1:
-        _fail(f"argument --mode: {args.mode!r} is invalid: a mode number must be >= 1.")
-    rod = _rod_from_args(args, args.mu)
+    rod = _rod_from_args(args, args.mu)  # --mu and --mode were checked by cli._checks
     m = int(th.critical_mode(rod)) if args.mode is None else args.mode
     out = {
         "F0cr_continuous": float(th.critical_load_continuous(rod)),

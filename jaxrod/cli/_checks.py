@@ -1,0 +1,91 @@
+"""The checks of a command's values that need no computation, run by `main` before anything
+else: before JAX starts, before a folder is created. Each failure is one line on stderr naming
+the option, and exit code 2 (`_fail`). Checks that need the model (the 3D rod's step limit) stay
+in the command."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ._common import _fail
+
+# The smallest resolution of each model (the models' own checks, said here with the option's name)
+MIN_N = {"field": (4, "nodes"), "galerkin": (1, "modes"), "rod3d": (4, "segments")}
+# The bottom of the critical-load bracket [N] (jaxrod/cli/boundary.py)
+MIN_DF_BRACKET = 1e-3
+
+
+def check_args(args) -> None:
+    """Fail on the first invalid value of the parsed `args` of any command."""
+    cmd = args.command
+    mu = getattr(args, "mu", None)
+    if cmd in ("theory", "simulate", "map", "boundary") and mu is not None and mu < 0:
+        _fail(f"argument --mu: {mu!r} is invalid: a friction coefficient must be >= 0.")
+    if cmd == "theory" and args.mode is not None and args.mode < 1:
+        _fail(f"argument --mode: {args.mode!r} is invalid: a mode number must be >= 1.")
+    if cmd == "simulate":
+        _check_simulate(args)
+    if cmd == "map":
+        if np.any(args.v0 <= 0):
+            _fail(f"argument --v0: velocities must be > 0 m/s, got {float(args.v0.min())!r}.")
+        _positive("--t1", args.t1, "s")
+    if cmd == "boundary" and np.any(args.dF <= 0):
+        _fail("argument --dF: loads above F0_6 must be > 0 N for a boundary to exist.")
+    if cmd == "critical-load":
+        if np.any(args.mu <= 0):
+            _fail("argument --mu: friction coefficients must be > 0 (no frictional boundary at mu = 0).")
+        _positive("--amplitude", args.amplitude, "(m/s, N/m or m)")
+        if args.max_dF <= MIN_DF_BRACKET:
+            _fail(f"argument --max-dF: {args.max_dF!r} is invalid: the bracket's top must be > its "
+                  f"bottom, {MIN_DF_BRACKET:g} N.")
+    if cmd in ("boundary", "critical-load") and args.model == "rod3d" and args.method == "departure":
+        _fail("argument --method: 'departure' is invalid with --model rod3d: use 'bisection' (the default).")
+    if getattr(args, "n", None) is not None and args.model in MIN_N:
+        least, unit = MIN_N[args.model]
+        if args.n < least:
+            _fail(f"argument --n: {args.n!r} is invalid: the {args.model} model needs >= {least} {unit}.")
+    for option in ("out", "plot", "export"):
+        if getattr(args, option, None) == "":
+            _fail(f"argument --{option}: an empty path is invalid.")
+
+
+def _check_simulate(args) -> None:
+    _positive("--t1", args.t1, "s")
+    if args.amplitude < 0:
+        _fail(f"argument --amplitude: {args.amplitude!r} is invalid: expected >= 0.")
+    if args.dt is not None:
+        _positive("--dt", args.dt, "s")
+    if args.n_save < 2:
+        _fail(f"argument --n-save: {args.n_save!r} is invalid: expected >= 2 saved times.")
+    if args.model == "rod3d":
+        if args.perturbation != "sine":
+            _fail(f"argument --perturbation: {args.perturbation!r} is not available with --model rod3d; use 'sine'.")
+        if args.speed is not None and args.speed < 0:
+            _fail(f"argument --speed: {args.speed!r} is invalid: expected >= 0 m/s.")
+        if args.speed is not None and args.control != "displacement":
+            _fail("argument --speed: only with --control displacement (the pushed end's speed).")
+    else:
+        for option, value in (("--control", args.control), ("--speed", args.speed), ("--export", args.export)):
+            if value is not None:
+                _fail(f"argument {option}: only with --model rod3d (got --model {args.model}).")
+
+
+def _positive(option: str, x: float, unit: str) -> None:
+    if not x > 0:
+        _fail(f"argument {option}: {x!r} is invalid: expected > 0 {unit}.")
+
+
+def check_figure_path(option: str, path: str) -> None:
+    """A file matplotlib can write: not a folder, and a format it knows (by the extension)."""
+    if os.path.isdir(path):
+        _fail(f"argument {option}: {path!r} is a folder; give a file name such as {os.path.join(path, 'sim.png')!r}.")
+    ext = os.path.splitext(path)[1].lstrip(".").lower()
+    if ext:
+        from matplotlib.backend_bases import FigureCanvasBase
+
+        known = FigureCanvasBase.get_supported_filetypes()
+        if ext not in known:
+            _fail(f"argument {option}: {ext!r} is not an image format matplotlib writes "
+                  f"(one of {', '.join(sorted(known))}).")
