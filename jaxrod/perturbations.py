@@ -110,9 +110,9 @@ class SineVelocity(AbstractPerturbation):
 
 
 class RandomVelocity(AbstractPerturbation):
-    """A lateral velocity drawn uniformly in [−`amplitude`, `amplitude`] [m/s] on every node of
-    the scene's noise grid (`grid` segments, static; see the module) from `key`; the rod
-    straight."""
+    """A lateral velocity of at most `amplitude` [m/s], drawn uniformly in [−`amplitude`,
+    `amplitude`] on every node of the scene's noise grid (`grid` segments, static; see the
+    module) from `key`; the rod straight."""
 
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
@@ -124,8 +124,9 @@ class RandomVelocity(AbstractPerturbation):
 
 
 class RandomShape(AbstractPerturbation):
-    """A lateral displacement drawn uniformly in [−`amplitude`, `amplitude`] [m] on every node
-    of the scene's noise grid (`grid` segments, static) from `key`, released from rest."""
+    """A lateral displacement of at most `amplitude` [m], drawn uniformly in [−`amplitude`,
+    `amplitude`] on every node of the scene's noise grid (`grid` segments, static) from `key`,
+    released from rest."""
 
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
@@ -138,10 +139,10 @@ class RandomShape(AbstractPerturbation):
 
 class RandomForce(AbstractPerturbation):
     """The reference paper's random position perturbation: lateral forces per unit length
-    drawn uniformly in [−`amplitude`, `amplitude`] [N/m] on every node of the scene's noise grid
-    (`grid` segments, static) act on the loaded, straight rod (friction included) for
-    `duration` [s] (default 1 ms); the rod is then released from rest in the shape they
-    produced.
+    of at most `amplitude` [N/m], drawn uniformly in [−`amplitude`, `amplitude`] on every node
+    of the scene's noise grid (`grid` segments, static) act on the loaded, straight rod
+    (friction included) for `duration` [s] (default 1 ms); the rod is then released from rest
+    in the shape they produced.
 
     The forcing phase is integrated with the run's fixed-step integrator (required).
     """

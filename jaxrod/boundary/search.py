@@ -274,7 +274,10 @@ def _along_curve(search, xs, refs, bracket, margin, progress):
 
 
 def _progress(total, show):
-    from tqdm.auto import tqdm
+    if show:
+        from tqdm.auto import tqdm
+    else:  # a disabled bar: plain tqdm (tqdm.auto warns in a notebook without ipywidgets)
+        from tqdm import tqdm
 
     return tqdm(total=total, disable=not show, unit="point", desc="boundary", leave=False)
 
