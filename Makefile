@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench bench-quick clean
+.PHONY: demo test test-slow bench bench-quick docs docs-serve clean
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
@@ -40,5 +40,14 @@ bench-quick: $(STAMP)
 		else echo "== $$s"; $(BIN)/python $$s; fi; \
 	done
 
+# The documentation site (mkdocs.yml, docs/): built into site/ with --strict (a broken link or
+# cross-reference fails), or served with live reload at http://127.0.0.1:8000. The test extra
+# installs MkDocs and its plugins (the `docs` extra alone: pip install -e ".[docs]").
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
+docs-serve: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs serve
+
 clean:
-	rm -rf $(VENV) results/demo
+	rm -rf $(VENV) results/demo site
