@@ -74,6 +74,7 @@ def stability_map(
     progress: bool = True,
     t1: float = 2.0,
     curve_rtol: float | None = 1e-3,
+    chunk_size: int | None = None,
 ) -> dict:
     """Classify the reference rod straight/buckled over the grid `dF` × `v0` for every μ in
     `mus` (sine mode-`mode` velocity perturbation), fit the boundary, and write `map.png`,
@@ -82,9 +83,10 @@ def stability_map(
     ([`jaxrod.boundary.boundary_curve`][] at the map's n and dt, to `curve_rtol`; `None`: not)
     and drawn over the grid.
 
-    Under `jax.distributed` each process runs its share of every map's members ([`jaxrod.sweep`][]),
-    all of them return the same summary, and process 0 alone writes the files and shows progress
-    (the searched boundary is not split: every process searches it alike).
+    Under `jax.distributed` each process runs its share of every map's chunks of `chunk_size`
+    members ([`jaxrod.sweep`][]; default: the whole map in one chunk, up to 1024 members), all of
+    them return the same summary, and process 0 alone writes the files and shows progress (the
+    searched boundary is not split: every process searches it alike).
 
     **Returns:** the summary (per μ: boundary points, fitted exponent ± standard error, the
     largest stable ΔF/F⁰_cr seen, counts), also written to `map.json`.
@@ -100,7 +102,7 @@ def stability_map(
     for mu in mus:
         spec = SweepSpec(model=model, perturbation="sine", mu=float(mu), mode=mode, n=n, t1=t1)
         path = None if out is None else os.path.join(out, f"sweep_mu{mu:g}")
-        res = sweep(spec, {"dF": dF, "amplitude": v0}, path=path, progress=progress)
+        res = sweep(spec, {"dF": dF, "amplitude": v0}, path=path, progress=progress, chunk_size=chunk_size)
         results[mu] = res
         summary["maps"][f"{mu:g}"] = _summarise(res, dF, v0, float(mu))
         if curve_rtol is not None and mu > 0 and model in ("field", "galerkin"):

@@ -16,9 +16,9 @@ import pytest
 
 from jaxrod.sweeps import OUTPUTS, SweepResult, SweepSpec, sweep
 
-SPEC = SweepSpec(model="field", n=16, perturbation="random-velocity", t1=0.3)
-INPUTS = {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05], "realization": list(range(16))}  # 64 members
-CHUNK = 16  # the default layout of this sweep on two processes (4 chunks); one process runs it as 1 chunk
+SPEC = SweepSpec(model="mode", perturbation="random-velocity", t1=0.3)  # the cheapest to compile
+INPUTS = {"dF": [5.0, 40.0], "amplitude": [0.05, 0.5], "realization": list(range(16))}  # 64 members
+CHUNK = 16  # 4 chunks
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # One job of two processes does three sweeps of the same members in three folders (one
@@ -47,7 +47,8 @@ def log(name):
 for name in ("fresh", "resume", "lost"):
     while name == "resume" and not os.path.exists(os.path.join(base, "resume.ready")):
         time.sleep(0.05)  # the test's one-process run is preparing it
-    r = sweep(spec, inputs, seed=3, path=os.path.join(base, name), progress=False, on_chunk=log(name))
+    r = sweep(spec, inputs, seed=3, chunk_size=16, path=os.path.join(base, name), progress=False,
+              on_chunk=log(name))
     np.savez(os.path.join(base, f"{name}.out{pid}.npz"), **r.outputs, **{"in_" + k: v for k, v in r.inputs.items()},
              processes=r.meta["processes"])
 """
@@ -87,8 +88,8 @@ def identical(a: SweepResult, outputs: dict, inputs: dict | None = None):
 
 @pytest.fixture(scope="module")
 def job(tmp_path_factory):
-    """The two-process job's folders, and the sweep in this one process (no runtime, default
-    layout: one chunk of 64), computed while the job runs."""
+    """The two-process job's folders, and the sweep in this one process (no runtime), computed
+    while the job runs."""
     base = tmp_path_factory.mktemp("distributed")
     port = free_port()
     t0 = time.perf_counter()
@@ -108,12 +109,13 @@ def job(tmp_path_factory):
         with pytest.raises(Interrupted):
             sweep(SPEC, INPUTS, seed=3, chunk_size=CHUNK, path=str(base / "resume"), progress=False, on_chunk=stop)
         (base / "resume.ready").touch()
-        reference = sweep(SPEC, INPUTS, seed=3, progress=False)
-        deadline = time.monotonic() + 240
-        while procs[1].poll() is None and procs[0].poll() is None and time.monotonic() < deadline:
-            time.sleep(0.05)
-        # process 1 is lost; process 0 waits for it at the end of the sweep: stop it, as a
-        # scheduler ends the job of a lost task
+        reference = sweep(SPEC, INPUTS, seed=3, chunk_size=CHUNK, progress=False)
+        try:
+            procs[1].wait(timeout=240)
+        except subprocess.TimeoutExpired:
+            pass
+        # process 1 is lost; process 0 fails at the end of the sweep, where it waits for the
+        # others' chunks (gloo: connection reset), or is stopped, as a scheduler ends the job
         procs[0].send_signal(signal.SIGKILL)
         procs[0].wait(timeout=60)
     finally:
@@ -158,7 +160,7 @@ def test_a_lost_process_is_made_up_by_a_rerun_on_one_process(job):
     missing = [c for c in range(4) if f"chunk_{c:05d}.npz" not in have]
     mtimes = {f: os.path.getmtime(path / f) for f in have}
     computed = []
-    res = sweep(SPEC, INPUTS, seed=3, path=str(path), progress=False, on_chunk=computed.append)
+    res = sweep(SPEC, INPUTS, seed=3, chunk_size=CHUNK, path=str(path), progress=False, on_chunk=computed.append)
     assert computed == missing  # only the missing members ran
     assert {f: os.path.getmtime(path / f) for f in have} == mtimes
     identical(reference, res.outputs, res.inputs)
@@ -193,3 +195,30 @@ def test_distributed_outside_a_cluster_ends_in_one_line(tmp_path):
     assert res.returncode == 2, res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("jaxrod: error: argument --coordinator:"), res.stderr
+
+
+@pytest.mark.slow
+def test_map_command_on_two_processes_writes_the_one_process_map(tmp_path):
+    grid = ["--model", "mode", "--mu", "0.3", "--dF", "1:40:4", "--v0", "0.005:0.5:4", "--t1", "0.5",
+            "--no-curve", "--chunk-size", "4", "--quiet"]
+    port, env = free_port(), worker_env()
+    procs = [subprocess.Popen([sys.executable, "-m", "jaxrod", "map", *grid, "--out", str(tmp_path / "two"),
+                               "--coordinator", f"127.0.0.1:{port}", "--num-processes", "2", "--process-id", str(pid)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+             for pid in (0, 1)]
+    try:
+        outs = [p.communicate(timeout=300) for p in procs]
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+    assert [p.returncode for p in procs] == [0, 0], outs
+    # process 0 reports (gloo itself prints a line on stdout in every process)
+    lines = [[x for x in out.splitlines() if not x.startswith("[Gloo]")] for out, _ in outs]
+    assert "x 2 processes" in lines[0][0] and lines[1] == []
+    # one process with one device, as each of the two had (another device count changes last bits)
+    one = subprocess.run([sys.executable, "-m", "jaxrod", "map", *grid, "--out", str(tmp_path / "one")],
+                         capture_output=True, text=True, env=env, timeout=300, check=True).stdout
+    assert (tmp_path / "two" / "map.csv").read_bytes() == (tmp_path / "one" / "map.csv").read_bytes()
+    assert lines[0][2:] == one.splitlines()[2:]  # the same summary (after the folder line)
+    assert len([f for f in os.listdir(tmp_path / "two" / "sweep_mu0.3") if f.startswith("chunk_")]) == 4

@@ -41,6 +41,9 @@ def _add_distributed_options(p: argparse.ArgumentParser) -> None:
                    help="number of processes")
     g.add_argument("--process-id", dest="process_id", type=_nonnegative_int, default=None, metavar="I",
                    help="this process's index, 0 <= I < N")
+    g.add_argument("--chunk-size", dest="chunk_size", type=_positive_int, default=None, metavar="M",
+                   help="members per chunk, the unit of work dealt to the processes and written to --out "
+                        "(default: a whole map of up to 1024 members, one chunk)")
 
 
 def _start_distributed(args) -> None:

@@ -28,7 +28,8 @@ def _cmd_map(args) -> int:
               f"({jax.devices()[0].platform})")
     try:
         s = stability_map(mus, args.dF, args.v0, args.model, args.n, 6, args.out,
-                          progress=not args.quiet, t1=args.t1, curve_rtol=None if args.no_curve else 1e-3)
+                          progress=not args.quiet, t1=args.t1, curve_rtol=None if args.no_curve else 1e-3,
+                          chunk_size=args.chunk_size)
     except ValueError as err:
         _fail(str(err))
     if not main:

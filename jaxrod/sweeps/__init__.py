@@ -16,10 +16,9 @@ chunk is written atomically and a re-run skips it.
 `sweep` call in every process splits the work: the missing chunks are dealt to the processes in
 turn, each runs its share with continuous batching on its own devices and writes its chunks to
 the shared `path`, and every process returns the whole merged result. Results depend only on the
-global member index (random keys are `fold_in(key(seed), index)`) and on the lane count (the
-default layout gives every device's share of a chunk all its `lanes`), so the merge equals a
-one-process run bit for bit, and a re-run with any number of processes completes only the
-missing chunks.
+global member index (random keys are `fold_in(key(seed), index)`) and on the chunk layout, which
+does not depend on the process count: the merge equals a one-process run with as many devices
+bit for bit, and a re-run with any number of processes completes only the missing chunks.
 """
 
 from .member import N_SAVE as N_SAVE

@@ -7,6 +7,7 @@ import json
 import math
 import os
 import time
+import warnings
 from collections.abc import Callable, Mapping
 
 import jax
@@ -50,10 +51,6 @@ def _expand(inputs: Mapping[str, object], combine: str):
     return flat, shape, names
 
 
-# the default chunks of a run on several processes: about this many per process
-_CHUNKS_PER_PROCESS = 4
-
-
 def _bytes_per_member(spec: SweepSpec, n: int | None) -> int:
     dof = n or 1
     if spec.model == "rod3d":
@@ -95,9 +92,8 @@ def sweep(
       any number of processes or devices (the chunk layout is the first run's). A different
       sweep at the same path is refused.
     - `chunk_size`: members per chunk (rounded up to a multiple of the device count); default
-      from `memory_mb`, at most 1024 (larger chunks wait longer for their slowest member); on
-      several processes at most about a quarter of a process's share, but at least `lanes`
-      per device.
+      from `memory_mb`, at most 1024 (larger chunks wait longer for their slowest member). The
+      unit of work dealt to the processes of a distributed run.
     - `members`: a sub-range of global member indices to run.
     - `progress`: show a progress bar (members, members/s); `on_chunk(c)`: called after
       chunk c is finished (and written).
@@ -113,11 +109,13 @@ def sweep(
     (`jaxrod.distributed.share`); each process writes its own chunks and, at the end, all of
     them exchange their new outputs (`jaxrod.distributed.gather`, which waits for every
     process), so every process returns the whole result. A member's outputs depend on its global
-    index and on the lane count of its device's share of the chunk (min(`lanes`, chunk
-    members per device): it sets the last bit of `max_theta` on some members), which the
-    default layout keeps at `lanes`: the merged result equals a one-process run bit for bit.
-    Every process needs the same number of local devices; `on_chunk` is called in the process
-    that ran the chunk, and only process 0 shows progress.
+    index and, in the last bit of some of them, on the width of its device's share of the chunk
+    (XLA compiles other widths differently): the chunk layout is the first run's whatever the
+    process count, and with as many devices per process as a one-process run has, the merged
+    result equals that run's bit for bit (to rounding across device counts). The default
+    layout makes one chunk of up to 1024 members: pass a smaller `chunk_size` to split a
+    smaller sweep. Every process needs the same number of local devices; `on_chunk` is called
+    in the process that ran the chunk, and only process 0 shows progress.
 
     **Returns:** a [`jaxrod.SweepResult`][] (`meta["processes"]`: the process count).
 
@@ -143,11 +141,6 @@ def sweep(
     n_proc = jax.process_count()
     if chunk_size is None:
         chunk_size = int(max(1, min(1024, memory_mb * 2**20 // _bytes_per_member(spec, n))))
-        if n_proc > 1:
-            # a few chunks per process, so that the shares even out, but a full set of lanes per
-            # device (a chunk's lane count sets the last bit of some outputs: see the docstring)
-            per_process = math.ceil(len(members) / (_CHUNKS_PER_PROCESS * n_proc))
-            chunk_size = min(chunk_size, max(lanes * n_dev, per_process))
     if not (isinstance(chunk_size, int) and chunk_size >= 1):
         raise ValueError(f"chunk_size = {chunk_size!r} is invalid: expected an int >= 1.")
     if scheduling not in ("pool", "chunk"):
@@ -212,6 +205,9 @@ def sweep(
     if n_proc > 1:  # one view of the folder for all processes: process 0's
         done = broadcast(done)
     mine = share(np.flatnonzero(~done))
+    if n_proc > n_chunks and jax.process_index() == 0:
+        warnings.warn(f"the sweep has {n_chunks} chunk(s) of {chunk_size} members for {n_proc} processes: some "
+                      "have nothing to do; a smaller chunk_size splits it further.", stacklevel=2)
     show = progress and jax.process_index() == 0
     ours = done.copy()
     ours[mine] = True
