@@ -116,9 +116,12 @@ def test_at_least_twenty_distinct_paths_with_bad_paths_among_them():
     assert sum(o in ("--out", "--export", "--plot") for _, o in CASES) >= 8
 
 
-def test_a_step_above_the_models_limit_names_dt(tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("argv", [["simulate", "--model", "field", "--n", "8", "--dt", "1"],
+                                  ["simulate", "--model", "mode", "--mode", "200"]],  # the default step
+                         ids=["given", "default"])
+def test_a_step_above_the_models_limit_names_dt(argv, tmp_path, monkeypatch, capsys):
     """The step limit needs the model (2/ω_max at the rod's resolution): checked after building it,
     before the run, and still reported as the option's error."""
     monkeypatch.chdir(tmp_path)
-    err = _one_line_error(capsys, ["simulate", "--model", "field", "--n", "8", "--dt", "1"], "--dt")
+    err = _one_line_error(capsys, argv, "--dt")
     assert "stability limit" in err

@@ -23,8 +23,11 @@ def _cmd_simulate(args) -> int:
     scene = Scene(rod, args.dF, pert, args.model, args.n, args.mode, args.dt)
     try:
         sol = scene.run(t1=args.t1, n_save=args.n_save, save_state=True, throw=False)
-    except ValueError as err:  # a --dt above the model's stability limit
-        _fail(("argument --dt: " if args.dt is not None and "dt" in str(err) else "") + str(err))
+    except ValueError as err:  # a step above the model's stability limit: given, or the default
+        msg = str(err)
+        if "dt" in msg:
+            msg = "argument --dt: " + msg + ("" if args.dt is not None else f" (the default step of --model {args.model})")
+        _fail(msg)
     from .._results import RESULTS
 
     out = {
