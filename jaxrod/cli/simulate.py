@@ -26,7 +26,8 @@ def _cmd_simulate(args) -> int:
     except ValueError as err:  # a step above the model's stability limit: given, or the default
         msg = str(err)
         if "dt" in msg:
-            msg = "argument --dt: " + msg + ("" if args.dt is not None else f" (the default step of --model {args.model})")
+            msg = "argument --dt: " + (msg if args.dt is not None
+                                       else msg.rstrip(".") + f" (the default step of --model {args.model}).")
         _fail(msg)
     from .._results import RESULTS
 
