@@ -110,7 +110,7 @@ def gather(arrays: Mapping[str, np.ndarray]) -> list[dict[str, np.ndarray]]:
 
 
 def broadcast(array: np.ndarray) -> np.ndarray:
-    """Process 0's `array` in every process (a collective, like `jaxrod.distributed.gather`):
-    one view of a shared resource, e.g. which result files exist, where the processes' own views
-    could differ by a moment."""
+    """Process 0's 1-D `array` in every process (a collective, like `jaxrod.distributed.gather`;
+    the other processes' arrays are ignored and may be empty): one view of a shared resource,
+    e.g. which result files exist, where the processes' own views could differ by a moment."""
     return gather({"x": array})[0]["x"]

@@ -184,8 +184,16 @@ def sweep(
             chunk_size = old["chunk_size"]
         elif jax.process_index() == 0:
             _atomic_write(_meta_file(path), lambda f: _dump_json(meta, f), ".json")
-    if n_proc > 1:  # the chunk layout of process 0 (the one in sweep.json)
-        chunk_size = int(broadcast(np.array([chunk_size], np.int64))[0])
+    # the plan: the chunk layout (sweep.json's) and the chunks already in the folder, as process 0
+    # sees them; the same for all processes, whose own views of the folder could differ a moment
+    plan = np.zeros(0, np.int64)
+    if jax.process_index() == 0:
+        on_disk = [path is not None and os.path.exists(_chunk_file(path, c))
+                   for c in range(math.ceil(len(index) / chunk_size))]
+        plan = np.array([chunk_size, *on_disk], np.int64)
+    if n_proc > 1:
+        plan = broadcast(plan)
+    chunk_size, done = int(plan[0]), plan[1:].astype(bool)
     meta["chunk_size"] = chunk_size
 
     spec_json = json.dumps(spec.to_json(), sort_keys=True)
@@ -199,11 +207,8 @@ def sweep(
     lane_steps = 0
 
     outputs = {k: np.full(len(index), _FILL[k]) for k in OUTPUTS}
-    n_chunks = math.ceil(len(index) / chunk_size)
+    n_chunks = len(done)
     bounds = [(c * chunk_size, min((c + 1) * chunk_size, len(index))) for c in range(n_chunks)]
-    done = np.array([path is not None and os.path.exists(_chunk_file(path, c)) for c in range(n_chunks)], bool)
-    if n_proc > 1:  # one view of the folder for all processes: process 0's
-        done = broadcast(done)
     mine = share(np.flatnonzero(~done))
     if n_proc > n_chunks and jax.process_index() == 0:
         warnings.warn(f"the sweep has {n_chunks} chunk(s) of {chunk_size} members for {n_proc} processes: some "
