@@ -4,10 +4,12 @@ The top level holds what a user reaches for: the rod (`RodChannel`), the models 
 `AbstractModel` interface: `SingleMode`, `GalerkinModel`, `FieldModel`, `Rod3D`), friction laws,
 integrators and `simulate`, perturbations, `Scene`, `sweep`, and the boundary searches
 (`critical_velocity`, `critical_load`). Submodules hold the rest (`theory`, `modal`,
-`batching`, `boundary`, `stability_map`, `worst_case`, `experiments`, `reproduce`).
+`batching`, `distributed`, `boundary`, `stability_map`, `worst_case`, `experiments`,
+`reproduce`).
 """
 
 from . import boundary as boundary
+from . import distributed as distributed
 from . import modal as modal
 from . import perturbations as perturbations
 from . import rod3d as rod3d
@@ -62,6 +64,6 @@ __all__ = [
     "RandomVelocity", "Rod3D", "RodChannel", "RunOptions", "Scene", "SineVelocity", "SingleMode",
     "Solution", "SplitLinearFriction", "SweepResult", "SweepSpec", "SymplecticEuler", "Tanh",
     "UserState", "__version__", "boundary", "coulomb_prox", "critical_load", "critical_velocity",
-    "exact_solution", "modal", "perturbations", "rod3d", "scene", "search", "simulate",
+    "distributed", "exact_solution", "modal", "perturbations", "rod3d", "scene", "search", "simulate",
     "stability_map", "sweep", "theory", "wilson_interval", "worst_case",
 ]
