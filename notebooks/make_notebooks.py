@@ -1,19 +1,27 @@
-"""Writes the research notebooks 01-06 (run: python notebooks/make_notebooks.py).
+"""Writes the research notebooks 01-06 (run: python notebooks/make_notebooks.py [--execute]).
 
 Each notebook has a size switch: with JAXROD_NB_SMALL=1 (what the test suite sets) it runs in
-seconds; otherwise at a resolution worth looking at, still minutes on a CPU.
+seconds; otherwise at a resolution worth looking at (on a shared 2-core CPU: 8-30 s each, but
+29 min for 04's 64 random-velocity searches at 499+ nodes). Figures are shown
+inline: the package's plotting functions return `matplotlib.figure.Figure` objects, which a
+cell shows by returning them, and the cells' own pyplot figures show through the inline
+backend. With `--execute` each notebook is also run top to bottom (in a temporary folder, at
+the size the switch says) and saved with its outputs, which the documentation site renders
+without running anything.
 """
 
+import argparse
 import os
+import tempfile
+import time
 
 import nbformat as nbf
 
-HEAD = '''import os
+HEAD = '''%matplotlib inline
+import os
 import jax
 jax.config.update("jax_enable_x64", True)
 import numpy as np
-import matplotlib
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import jaxrod as jr
 
@@ -37,7 +45,15 @@ assert m == 6'''),
 sol = scene.run(t1=0.2 if SMALL else 2.0, n_save=401)
 print("buckled:", bool(sol.buckled), "at t =", float(sol.t_buckle), "s; energy balance error",
       float(sol.energy_balance_error()))
-plt.plot(sol.ts, sol.amplitude); plt.xlabel("t [s]"); plt.ylabel("max |theta| [rad]"); plt.yscale("log")'''),
+ts, amp = np.asarray(sol.ts), np.asarray(sol.amplitude)
+ran = ts <= float(sol.t_stop)   # the run stops when the rod buckles or sticks
+plt.plot(ts[ran], amp[ran]); plt.xlabel("t [s]"); plt.ylabel("max |theta| [rad]"); plt.yscale("log")'''),
+        ("md", "The package's picture of a run (what `jaxrod simulate --plot` writes): θ(s, t) and the modal power spectrum. "
+               "`plot_simulation` returns a `matplotlib.figure.Figure`; returning it from the cell shows it."),
+        ("code", '''from jaxrod.figures import plot_simulation
+
+fig = plot_simulation(scene, sol)
+fig'''),
         ("md", "## A small stability map (E3)"),
         ("code", '''k = 5 if SMALL else 12
 res = jr.sweep(jr.SweepSpec(model="field", n=32 if SMALL else 128, t1=0.5 if SMALL else 2.0),
@@ -45,7 +61,7 @@ res = jr.sweep(jr.SweepSpec(model="field", n=32 if SMALL else 128, t1=0.5 if SMA
 print(res.summary())
 b = res.grid("buckled")
 plt.figure(); plt.pcolormesh(np.geomspace(1, 40, k), 1e3 * np.geomspace(2e-3, 0.1, k), b.T, shading="nearest")
-plt.xscale("log"); plt.yscale("log"); plt.xlabel("dF [N]"); plt.ylabel("v0 [mm/s]")'''),
+plt.xscale("log"); plt.yscale("log"); plt.xlabel("dF [N]"); plt.ylabel("v0 [mm/s]");'''),
     ],
     "02_stable_zone": [
         ("md", "# 02 The stable zone and the phase plane\nThe single-mode oscillator A'' + kA + f sgn(A') = 0 under load (k < 0): the analytic zone against a vmapped projected-Verlet classification."),
@@ -65,7 +81,7 @@ assert (stable == zone).mean() > 0.95'''),
         ("code", '''for v0 in (0.9, 1.1):  # just inside / outside the velocity intercept f/sqrt|k| = 1
     sol = jr.simulate(model, jr.Exact(), 0.0, v0, 6.0, n_save=600)
     plt.plot(sol.q, sol.v, label=f"v0 = {v0}")
-plt.legend(); plt.xlim(-1.5, 3)'''),
+plt.legend(); plt.xlim(-1.5, 3);'''),
     ],
     "03_stability_maps": [
         ("md", "# 03 Stability maps (E3)\nStraight or buckled over (dF, v0), with and without friction, and the fitted boundary."),
@@ -77,8 +93,10 @@ fric = summary["maps"]["0.3"]
 print("boundary exponent:", fric["exponent"], "+/-", fric["exponent_stderr"], "(theory -0.5)")
 print("largest stable dF/F0cr:", fric["largest_stable_dF_over_F0cr"])
 assert summary["maps"]["0"]["stable"] == 0'''),
-        ("code", '''from IPython.display import Image
-Image("nb03_map/map.png")'''),
+        ("md", "The map as a figure: the sweeps were kept in `nb03_map/` (resumable), and `plot_maps` draws them (the `map.png` of `jaxrod map`)."),
+        ("code", '''results = {mu: jr.SweepResult.load(f"nb03_map/sweep_mu{mu:g}") for mu in (0.3, 0.0)}
+fig = jr.stability_map.plot_maps(results, summary)
+fig'''),
     ],
     "04_friction_power_laws": [
         ("md", "# 04 Friction power laws (E4)\nThe critical load above F0_6 against mu, by root search, for a sine and a random velocity perturbation."),
@@ -108,7 +126,7 @@ f = float(jr.theory.friction_amplitude(rod))
 for m in (2, 4, 6, 8, 10):
     k = np.asarray(jr.theory.stiffness(rod, m, F))
     plt.semilogy(F, np.where(k < 0, 1e3 * float(rod.R) * f / np.sqrt(np.abs(k)), np.nan), label=f"mode {m}")
-plt.legend(); plt.xlabel("F [N]"); plt.ylabel("R Adot_cr [mm/s]")'''),
+plt.legend(); plt.xlabel("F [N]"); plt.ylabel("R Adot_cr [mm/s]");'''),
         ("code", '''R = 3 if SMALL else 16
 res = jr.sweep(jr.SweepSpec(model="field", n=32 if SMALL else 128, perturbation="random-velocity", t1=0.5 if SMALL else 2.0),
                {"mu": [0.1, 0.5], "dF": [10.0], "amplitude": [0.05], "realization": np.arange(R)}, progress=False)
@@ -136,12 +154,29 @@ assert wc["norm_worst"] <= wc["norm_sine"]'''),
 }
 
 
-def main():
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("names", nargs="*", help="notebooks to write (default: all), e.g. 01_quick_start")
+    ap.add_argument("--execute", action="store_true",
+                    help="run each notebook and save it with its outputs (JAXROD_NB_SMALL=1: the small setting)")
+    args = ap.parse_args(argv)
+    unknown = set(args.names) - set(NOTEBOOKS)
+    if unknown:
+        ap.error(f"unknown notebook(s) {sorted(unknown)}; expected some of {list(NOTEBOOKS)}")
     here = os.path.dirname(os.path.abspath(__file__))
-    for name, cells in NOTEBOOKS.items():
+    for name in args.names or NOTEBOOKS:
         nb = nbf.v4.new_notebook()
-        nb.cells = [nbf.v4.new_markdown_cell(src) if kind == "md" else nbf.v4.new_code_cell(src) for kind, src in cells]
+        nb.cells = [nbf.v4.new_markdown_cell(src) if kind == "md" else nbf.v4.new_code_cell(src)
+                    for kind, src in NOTEBOOKS[name]]
         nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+        if args.execute:
+            import nbclient
+
+            start = time.perf_counter()
+            with tempfile.TemporaryDirectory() as tmp:  # files the notebook writes (nb03_map/) stay out of the tree
+                nbclient.NotebookClient(nb, timeout=3600, kernel_name="python3", record_timing=False,
+                                        resources={"metadata": {"path": tmp}}).execute()
+            print(f"{name}: executed in {time.perf_counter() - start:.0f} s")
         nbf.write(nb, os.path.join(here, f"{name}.ipynb"))
 
 

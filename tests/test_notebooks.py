@@ -1,5 +1,5 @@
-"""Every notebook runs top to bottom in its small setting (JAXROD_NB_SMALL=1): the quick-start
-notebook in the default suite, the others (75 s together) under `slow`."""
+"""Every notebook runs top to bottom in its small setting (JAXROD_NB_SMALL=1), showing its figures
+inline: the quick-start notebook in the default suite, the others (75 s together) under `slow`."""
 
 import pathlib
 
@@ -24,5 +24,12 @@ def test_notebook_runs(path, tmp_path, monkeypatch):
     client = nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
                                      resources={"metadata": {"path": str(tmp_path)}})
     client.execute()
-    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []) if o.output_type == "error"]
-    assert not errors
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+    assert not [o for o in outputs if o.output_type == "error"]
+    assert any("image/png" in o.get("data", {}) for o in outputs)  # figures inline, not written to files
+
+
+def test_notebooks_show_figures_inline_not_as_files():
+    for path in NOTEBOOKS:
+        source = "\n".join(c.source for c in nbformat.read(path, as_version=4).cells if c.cell_type == "code")
+        assert "matplotlib.use(" not in source and "display import Image" not in source, path.name
