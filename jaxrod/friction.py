@@ -23,7 +23,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from ._numerics import safe_norm
+from ._numerics import safe_hypot
+
 
 __all__ = ["AbstractFriction", "Coulomb", "Tanh", "coulomb_prox"]
 
@@ -69,10 +70,12 @@ class AbstractFriction(eqx.Module):
 
     @abc.abstractmethod
     def impulse_2d(self, u, W, bound_stick, bound_slip):
-        """The vector law at contact points (the 3D rod): per point, the 2D impulse `p` [N·s]
-        for the tangential slip velocities `u` (n, 2) [m/s] of points with inverse mass `W`
-        (n, 2, 2), under the impulse bounds `bound_stick` (to hold) and `bound_slip` (when
-        sliding) [N·s], (n,). Returns `(p, sticks)`: `sticks` marks the points held at rest."""
+        """The vector law at contact points (the 3D rod): per point, the 2D impulse
+        `p = (p₁, p₂)` [N·s] for the tangential slip velocities `u = (u₁, u₂)` [m/s] of points
+        with the symmetric inverse mass `W = (W₁₁, W₁₂, W₂₂)` [1/kg], under the impulse bounds
+        `bound_stick` (to hold) and `bound_slip` (when sliding) [N·s]. Every entry is an array
+        of one shape (one element per point: components as separate arrays, which fuse on
+        CPU). Returns `(p, sticks)`: `sticks` marks the points held at rest."""
 
 
 class Coulomb(AbstractFriction):
@@ -93,31 +96,31 @@ class Coulomb(AbstractFriction):
         """The exact proximal step of the vector law: stick, p = −W⁻¹u, while |W⁻¹u| ≤
         `bound_stick`; otherwise the impulse of norm `bound_slip` that maximises dissipation,
         p = −(W + λI)⁻¹u with |p| = `bound_slip` (a 1D secular equation in λ, solved by Newton)."""
-        det = W[:, 0, 0] * W[:, 1, 1] - W[:, 0, 1] * W[:, 1, 0]
+        W11, W12, W22 = W
 
-        def solve(A_det, A, b):
-            return jnp.stack([A[:, 1, 1] * b[:, 0] - A[:, 0, 1] * b[:, 1],
-                              -A[:, 1, 0] * b[:, 0] + A[:, 0, 0] * b[:, 1]], -1) / A_det[:, None]
+        def solve(lam, b1, b2):  # (W + λI)⁻¹ b
+            a11, a22 = W11 + lam, W22 + lam
+            det = a11 * a22 - W12 * W12
+            return (a22 * b1 - W12 * b2) / det, (a11 * b2 - W12 * b1) / det
 
-        p_stick = -solve(det, W, u)
-        sticks = safe_norm(p_stick) <= bound_stick
+        zero = jnp.zeros_like(W11)
+        s1, s2 = solve(zero, *u)
+        p_stick = (-s1, -s2)
+        sticks = safe_hypot(*p_stick) <= bound_stick
         slips = ~sticks & (bound_slip > 0)
         # slip: Newton on φ(λ) = 1/|p(λ)| − 1/c (concave, increasing), from a λ₀ left of the root
         c = jnp.where(slips, bound_slip, 1.0)
-        trW = W[:, 0, 0] + W[:, 1, 1]
-        us = jnp.where(slips[:, None], u, jnp.array([[1.0, 0.0]], u.dtype) * 2.0 * trW[:, None])
-        lam = jnp.maximum(0.0, safe_norm(us) / c - trW)
-        eye = jnp.eye(2, dtype=u.dtype)
+        trW = W11 + W22
+        us = (jnp.where(slips, u[0], 2.0 * trW), jnp.where(slips, u[1], 0.0))
+        lam = jnp.maximum(0.0, safe_hypot(*us) / c - trW)
         for _ in range(8):
-            A = W + lam[:, None, None] * eye[None]
-            Ad = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0]
-            p = -solve(Ad, A, us)
-            pn = safe_norm(p)
-            dphi = jnp.sum(p * solve(Ad, A, p), -1) / pn**3
+            p1, p2 = solve(lam, *us)
+            pn = safe_hypot(p1, p2)
+            q1, q2 = solve(lam, p1, p2)
+            dphi = (p1 * q1 + p2 * q2) / pn**3  # p = −A⁻¹u: the sign cancels in p·A⁻¹p
             lam = jnp.maximum(lam - (1.0 / pn - 1.0 / c) / dphi, 0.0)
-        A = W + lam[:, None, None] * eye[None]
-        p_slip = -solve(A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0], A, us)
-        return jnp.where(sticks[:, None], p_stick, jnp.where(slips[:, None], p_slip, 0.0)), sticks
+        q1, q2 = solve(lam, *us)
+        return tuple(jnp.where(sticks, ps, jnp.where(slips, -q, 0.0)) for ps, q in zip(p_stick, (q1, q2))), sticks
 
 
 class Tanh(AbstractFriction):
@@ -143,8 +146,9 @@ class Tanh(AbstractFriction):
 
     def impulse_2d(self, u, W, bound_stick, bound_slip):
         """The explicit smoothed impulse −`bound_slip`·tanh(|u|/ε)·u/|u| (never sticks)."""
-        x = safe_norm(u) / self.eps
+        x = safe_hypot(*u) / self.eps
         small = x < 1e-4
         xs = jnp.where(small, 1.0, x)
         tanhc = jnp.where(small, 1.0 - x**2 / 3.0, jnp.tanh(xs) / xs)  # tanh(x)/x
-        return -(bound_slip * tanhc / self.eps)[:, None] * u, jnp.zeros(u.shape[:1], bool)
+        k = -bound_slip * tanhc / self.eps
+        return (k * u[0], k * u[1]), jnp.zeros(x.shape, bool)

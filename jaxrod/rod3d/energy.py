@@ -1,17 +1,17 @@
 """The 3D rod's energy and the forces it gives: stretch, shear, bend and twist of the discrete
 Cosserat rod, gravity and body forces, the dead end load, Hertz–Hunt–Crossley wall contact, and
-forces and material torques as one reverse-mode gradient (docs/physics.md §7). Functions of the
+the node forces and material torques, the exact gradient of that energy written in closed form
+(docs/physics.md §7; tests check it against reverse-mode AD of `potential`). Functions of the
 model (`jaxrod.rod3d.Rod3D` calls them as methods)."""
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
 from .._numerics import safe_norm
-from .so3 import log_so3, skew
+from . import components as c3
 
 __all__ = ['strains', 'elastic_terms', 'penetration', 'contact_energy', 'external_energy', 'potential', 'kinetic_terms', 'generalized_forces', 'contact_normal', 'forces']
 
@@ -20,11 +20,18 @@ E3 = np.array([0.0, 0.0, 1.0])
 
 def strains(model, x, Q):
     """Shear/stretch strains σ (n, 3) and curvatures κ (n−1, 3), material frame."""
-    e = x[1:] - x[:-1]
-    sigma = jnp.einsum("jab,jb->ja", Q, e) / model.l0 - jnp.asarray(E3, e.dtype)[None, :]
-    R = jnp.einsum("jab,jcb->jac", Q[1:], Q[:-1])  # Qᵢ Q_{i−1}ᵀ
-    kappa = log_so3(R) / model.l0
-    return sigma, kappa
+    sigma, psi = _strains(model, c3.unpack(x), c3.unpack_matrix(Q))
+    return c3.pack(sigma), c3.pack(psi) / model.l0
+
+
+def _strains(model, X, Qr):
+    """σ and ψ = log(Qⱼ₊₁Qⱼᵀ) = l̂κ as component tuples, with the pieces the forces reuse."""
+    e = tuple(X[k][1:] - X[k][:-1] for k in range(3))
+    Qe = c3.matvec(Qr, e)
+    sigma = (Qe[0] / model.l0, Qe[1] / model.l0, Qe[2] / model.l0 - 1.0)
+    upper = tuple(tuple(q[1:] for q in row) for row in Qr)
+    lower = tuple(tuple(q[:-1] for q in row) for row in Qr)
+    return sigma, c3.log_rotation(c3.relative_rotation(upper, lower))
 
 
 def elastic_terms(model, x, Q) -> dict[str, Float[Array, ""]]:
@@ -43,12 +50,17 @@ def elastic_terms(model, x, Q) -> dict[str, Float[Array, ""]]:
 def penetration(model, x) -> tuple[Float[Array, " n1"], Float[Array, "n1 3"]]:
     """Penetration δ = r − R of each node beyond the clearance (negative: a gap) and the
     outward radial unit e_r."""
-    yz = x[:, 1:]
-    r = safe_norm(yz)
-    rs = jnp.where(r > 0, r, 1.0)
-    down = jnp.broadcast_to(jnp.array([0.0, -1.0], x.dtype), yz.shape)
-    e_r = jnp.concatenate([jnp.zeros_like(r)[:, None], jnp.where(r[:, None] > 0, yz / rs[:, None], down)], -1)
-    return r - model.rod.R, e_r
+    delta, e_r = _penetration(model, c3.unpack(x))
+    return delta, c3.pack(e_r)
+
+
+def _penetration(model, X):
+    y, z = X[1], X[2]
+    r2 = y * y + z * z
+    pos = r2 > 0
+    r = jnp.where(pos, jnp.sqrt(jnp.where(pos, r2, 1.0)), 0.0)
+    rs = jnp.where(pos, r, 1.0)
+    return r - model.rod.R, (jnp.zeros_like(r), jnp.where(pos, y / rs, 0.0), jnp.where(pos, z / rs, -1.0))
 
 
 def contact_energy(model, x):
@@ -80,27 +92,71 @@ def kinetic_terms(model, v, w):
 
 
 def generalized_forces(model, x, Q):
-    """Conservative node forces (n+1, 3) [N] and material torques (n, 3) [N·m]."""
+    """Conservative node forces (n+1, 3) [N] and material torques (n, 3) [N·m]: minus the
+    gradient of `potential` with respect to the node positions and to the rotations φ of
+    Q → (I − [φ]×) Q, in closed form (see `_conservative`)."""
+    f, tau = _conservative(model, c3.unpack(x), c3.unpack_matrix(Q))
+    return c3.pack(f), c3.pack(tau)
 
-    def U(x, phi):
-        Qp = Q - jnp.einsum("jab,jbc->jac", skew(phi), Q)
-        return model.potential(x, Qp)
 
-    gx, gphi = jax.grad(U, argnums=(0, 1))(x, jnp.zeros((model.n, 3), x.dtype))
-    return -gx, -gphi
+def _shift(a, side):
+    """`a` padded with one zero at the start ("left": entry i is a[i − 1]) or at the end
+    ("right": entry i is a[i]): segment values seen from the nodes, joint values from the
+    segments."""
+    zero = jnp.zeros((1,) + a.shape[1:], a.dtype)
+    return jnp.concatenate([zero, a]) if side == "left" else jnp.concatenate([a, zero])
+
+
+def _conservative(model, X, Qr):
+    """Node forces and material torques as component tuples.
+
+    Stretch and shear: with the material stress n = S σ (S = diag(κGA, κGA, EA)), segment j
+    pulls node j + 1 back and node j on by Qⱼᵀ nⱼ, and turns by (Qⱼ eⱼ) × nⱼ. Bend and twist:
+    with ψ = log Rⱼ (Rⱼ = Qⱼ₊₁ Qⱼᵀ) and m = Bψ/l̂, rotating Qⱼ₊₁ by φ and Qⱼ by φ' perturbs Rⱼ
+    on the left by δ = Rⱼ φ' − φ, so the couple g = J_l(ψ)⁻ᵀ m acts on segment j + 1 and −Rⱼᵀ g
+    on segment j. Wall contact pushes along −e_r by k l̄ δ^{3/2}; gravity, body forces and the
+    dead end load are constant."""
+    rod, l0 = model.rod, model.l0
+    dtype = X[0].dtype
+    e = tuple(X[k][1:] - X[k][:-1] for k in range(3))
+    Qe = c3.matvec(Qr, e)
+    kGA = model.shear_coefficient * rod.GA
+    stress = (kGA * Qe[0] / l0, kGA * Qe[1] / l0, rod.EA * (Qe[2] / l0 - 1.0))
+    F = c3.rmatvec(Qr, stress)  # lab
+    f = tuple(_shift(F[k], "right") - _shift(F[k], "left") for k in range(3))
+    tau = c3.cross(Qe, stress)
+    upper = tuple(tuple(q[1:] for q in row) for row in Qr)
+    lower = tuple(tuple(q[:-1] for q in row) for row in Qr)
+    R = c3.relative_rotation(upper, lower)
+    psi = c3.log_rotation(R)
+    g = c3.left_jacobian_inv_t(psi, (rod.EI * psi[0] / l0, rod.EI * psi[1] / l0, rod.GJ * psi[2] / l0))
+    Rg = c3.rmatvec(R, g)
+    tau = tuple(tau[k] + _shift(g[k], "left") - _shift(Rg[k], "right") for k in range(3))
+    if model.channel:
+        delta, e_r = _penetration(model, X)
+        el = model.voronoi * model.contact_stiffness * jnp.maximum(delta, 0.0) ** 1.5
+        f = c3.sub(f, c3.scale(el, e_r))
+    ext = model.mass[:, None] * model.g_vec[None, :] + model.voronoi[:, None] * model.body_force[None, :]
+    if model.control == "load":
+        ext = ext.at[-1, 0].add(-model.end_load)
+    f = c3.add(f, c3.unpack(ext.astype(dtype)))
+    return f, tau
 
 
 def contact_normal(model, x, v):
     """Normal force per node [N] (elastic + Hunt–Crossley, ≥ 0), its damping part [N] and
     the outward radius e_r."""
-    delta, e_r = model.penetration(x)
+    N, N_damp, e_r = _contact_normal(model, c3.unpack(x), c3.unpack(v))
+    return N, N_damp, c3.pack(e_r)
+
+
+def _contact_normal(model, X, V):
+    delta, e_r = _penetration(model, X)
     if not model.channel:
         z = jnp.zeros_like(delta)
         return z, z, e_r
-    pen = jnp.maximum(delta, 0.0)
-    el = model.voronoi * model.contact_stiffness * pen**1.5
-    ddot = jnp.sum(v * e_r, -1)
-    total = jnp.maximum(el * (1.0 + model.contact_damping * ddot), 0.0)
+    el = model.voronoi * model.contact_stiffness * jnp.maximum(delta, 0.0) ** 1.5
+    total = jnp.maximum(el * (1.0 + model.contact_damping * c3.dot(V, e_r)), 0.0)
     return total, total - el, e_r
 
 
@@ -108,7 +164,9 @@ def forces(model, x, Q, v):
     """Everything a kick needs at (x, Q) with velocities v: node forces [N] (elastic,
     contact, gravity, body, damping), material torques [N·m], normal forces [N] and the
     non-conservative part of the node forces [N] (contact and viscous damping)."""
-    fx, tau = model.generalized_forces(x, Q)
-    N, N_damp, e_r = model.contact_normal(x, v)
-    f_damp = -N_damp[:, None] * e_r - model.damping * model.mass[:, None] * v
-    return fx + f_damp, tau, N, f_damp
+    X, V = c3.unpack(x), c3.unpack(v)
+    f, tau = _conservative(model, X, c3.unpack_matrix(Q))
+    N, N_damp, e_r = _contact_normal(model, X, V)
+    cm = model.damping * model.mass
+    f_damp = tuple(-N_damp * e_r[k] - cm * V[k] for k in range(3))
+    return c3.pack(c3.add(f, f_damp)), c3.pack(tau), N, c3.pack(f_damp)

@@ -25,7 +25,7 @@ from ._checks import check_arguments
 from .._numerics import float_leaf
 from . import energy
 from .contact import friction_pass
-from .so3 import exp_so3
+from . import components as c3
 from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, straight_state, wall_angle
 from .stiffness import max_frequency
 
@@ -253,15 +253,18 @@ class Rod3D(AbstractModel):
     def kick(self, q, v: Rod3DVelocity, a: Rod3DForces, h) -> Rod3DVelocity:
         """Node velocities by f/m, spins by Euler's equations J ω̇ = τ − ω × Jω; held degrees of
         freedom keep their prescribed values."""
-        J = self.inertia[None, :]
+        J = c3.unpack(self.inertia)
+        W = c3.unpack(v.w)
+        gyro = c3.cross(W, (J[0] * W[0], J[1] * W[1], J[2] * W[2]))
+        tau = c3.unpack(a.tau)
+        w = c3.pack(tuple(W[k] + h * (tau[k] - gyro[k]) / J[k] for k in range(3)))
         vn = v.v + h * a.f / self.mass[:, None]
-        w = v.w + h * (a.tau - jnp.cross(v.w, J * v.w)) / J
         vn, w = self.constrain(vn, w)
         return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual)
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
-        return Rod3DPosition(q.x + h * v.v, jnp.einsum("jab,jbc->jac", exp_so3(-h * v.w), q.Q))
+        return Rod3DPosition(q.x + h * v.v, c3.pack_matrix(c3.rotate(c3.scale(-h, c3.unpack(v.w)), c3.unpack_matrix(q.Q))))
 
     def friction_bounds(self, t=None):
         """The friction coefficients (μ_s, μ_d): the rod's bounds are μ N per contact, with N

@@ -1,0 +1,110 @@
+"""Vectors and rotations of the 3D rod as tuples of component arrays, for its step.
+
+The rod's state keeps (n, 3) and (n, 3, 3) arrays; the step unpacks them once into one array
+per component and packs its results once. On CPU this is what lets XLA fuse a step into few
+kernels: a sum over a trailing axis of length 3 is a reduction (its own kernel), a `stack` a
+concatenation (often its own kernel), an einsum over (n, 3, 3) batches n tiny matrix products;
+the same arithmetic on separate component arrays is elementwise and fuses with its neighbours.
+A vector is a tuple `(x, y, z)` of arrays of one shape, a matrix a tuple of three row vectors.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+__all__ = ["unpack", "pack", "unpack_matrix", "pack_matrix", "dot", "cross", "add", "sub", "scale",
+           "matvec", "rmatvec", "rotate", "log_rotation", "left_jacobian_inv_t", "relative_rotation"]
+
+
+def unpack(a):
+    """(…, 3) array → tuple of three (…) arrays."""
+    return a[..., 0], a[..., 1], a[..., 2]
+
+
+def pack(v):
+    """Tuple of three arrays → (…, 3) array."""
+    return jnp.stack(v, -1)
+
+
+def unpack_matrix(A):
+    """(…, 3, 3) array → tuple of three row vectors."""
+    return tuple((A[..., a, 0], A[..., a, 1], A[..., a, 2]) for a in range(3))
+
+
+def pack_matrix(A):
+    return jnp.stack([jnp.stack(row, -1) for row in A], -2)
+
+
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def scale(s, a):
+    return (s * a[0], s * a[1], s * a[2])
+
+
+def matvec(A, b):
+    """A b (A as rows)."""
+    return (dot(A[0], b), dot(A[1], b), dot(A[2], b))
+
+
+def rmatvec(A, b):
+    """Aᵀ b (A as rows)."""
+    return tuple(A[0][c] * b[0] + A[1][c] * b[1] + A[2][c] * b[2] for c in range(3))
+
+
+def rotate(phi, A):
+    """exp([φ]×) A, column by column (Rodrigues: A_c + a φ × A_c + b φ × (φ × A_c)), with the
+    series of `jaxrod.rod3d.so3.exp_so3` below |φ| = 1e-4 rad."""
+    th2 = dot(phi, phi)
+    small = th2 < 1e-8
+    ths = jnp.sqrt(jnp.where(small, 1.0, th2))
+    a = jnp.where(small, 1.0 - th2 / 6.0, jnp.sin(ths) / ths)
+    b = jnp.where(small, 0.5 - th2 / 24.0, (1.0 - jnp.cos(ths)) / ths**2)
+    cols = []
+    for c in range(3):
+        col = (A[0][c], A[1][c], A[2][c])
+        k1 = cross(phi, col)
+        cols.append(add(col, add(scale(a, k1), scale(b, cross(phi, k1)))))
+    return tuple(tuple(cols[c][r] for c in range(3)) for r in range(3))
+
+
+def relative_rotation(A, B):
+    """A Bᵀ (both as rows): entry (a, c) is row a of A · row c of B."""
+    return tuple(tuple(dot(A[a], B[c]) for c in range(3)) for a in range(3))
+
+
+def log_rotation(R):
+    """The rotation vector of R (as rows), as `jaxrod.rod3d.so3.log_so3`."""
+    s = (0.5 * (R[2][1] - R[1][2]), 0.5 * (R[0][2] - R[2][0]), 0.5 * (R[1][0] - R[0][1]))
+    c = 0.5 * (R[0][0] + R[1][1] + R[2][2] - 1.0)
+    s2 = dot(s, s)
+    small = s2 < 1e-6
+    sns = jnp.sqrt(jnp.where(small, 1.0, s2))
+    factor = jnp.where(small, 1.0 + s2 / 6.0 + 3.0 * s2**2 / 40.0, jnp.arctan2(sns, c) / sns)
+    return scale(factor, s)
+
+
+def left_jacobian_inv_t(psi, m):
+    """J_l(ψ)⁻ᵀ m = m + ½ ψ × m + c(θ) ψ × (ψ × m), c = 1/θ² − (1 + cos θ)/(2θ sin θ), θ = |ψ|
+    (series 1/12 + θ²/720 + θ⁴/30240 below θ = 1e-2): the gradient of m · log(exp([δ]×) R)
+    with respect to δ at δ = 0, for ψ = log R (a left perturbation of R)."""
+    th2 = dot(psi, psi)
+    small = th2 < 1e-4
+    ths = jnp.sqrt(jnp.where(small, 1.0, th2))
+    c = jnp.where(small, 1.0 / 12.0 + th2 / 720.0 + th2**2 / 30240.0,
+                  1.0 / ths**2 - (1.0 + jnp.cos(ths)) / (2.0 * ths * jnp.sin(ths)))
+    pm = cross(psi, m)
+    return add(m, add(scale(0.5, pm), scale(c, cross(psi, pm))))
