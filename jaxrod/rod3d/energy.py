@@ -10,7 +10,6 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._numerics import safe_norm
 from . import components as c3
 
 __all__ = ['strains', 'elastic_terms', 'penetration', 'contact_energy', 'external_energy', 'potential', 'kinetic_terms', 'generalized_forces', 'contact_normal', 'forces']
