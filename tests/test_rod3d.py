@@ -31,6 +31,26 @@ def test_so3_roundtrip_and_finite_gradients_at_identity():
     np.testing.assert_allclose(g, 2 * phi, atol=1e-9)
 
 
+def test_buckling_threshold_follows_the_control():
+    """Dead load and displacement control: 0.5 rad, as the reduced models. Held ends after a
+    pre-compression ΔF above F⁰: half the amplitude whose end shortening relieves ΔF, from
+    the energy balance (2/(R ω₆)) √(ΔF/EA) written out here; 0.5 rad at or below F⁰."""
+    rod = jr.RodChannel.reference(0.3)
+    F0 = float(jr.theory.reference_load(rod))
+    assert float(Rod3D(rod, 12, control="load", end_load=F0 + 5.0).buckle_threshold) == 0.5
+    assert float(Rod3D(rod, 12, control="displacement", speed=1e-3).buckle_threshold) == 0.5
+    assert float(Rod3D(rod, 12, control="force", preload=F0 - 1.0).buckle_threshold) == 0.5
+    for dF in (1.0, 5.0, 20.0):
+        model = Rod3D(rod, 12, control="force", preload=F0 + dF)
+        omega6 = 6 * np.pi / float(rod.L)
+        held = 2.0 / (float(rod.R) * omega6) * np.sqrt(dF / float(rod.EA))
+        assert float(model.buckle_threshold) == pytest.approx(min(0.5, 0.5 * held), rel=1e-12)
+        # and the model's own initial state is held at its preload
+        q, _ = model.initial_state()
+        np.testing.assert_allclose(model.axial_force(q.x, q.Q), F0 + dF, rtol=1e-9)
+    assert float(Rod3D(rod, 12, control="force", preload=F0 + 5.0).buckle_threshold) < 0.2
+
+
 @pytest.mark.parametrize("control", ["load", "force"])
 def test_closed_form_forces_are_minus_the_energy_gradient(control):
     """The step's forces and torques (written out by hand) against reverse-mode AD of the

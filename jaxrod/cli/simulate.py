@@ -86,7 +86,8 @@ def _simulate_rod3d(args, rod) -> int:
     args.speed = 1e-3 if args.speed is None else args.speed
     n = 60 if args.n is None else args.n
     F = float(theory.reference_load(rod)) + args.dF if args.control != "displacement" else 0.0
-    model = Rod3D(rod, n, control=args.control, speed=args.speed, end_load=F if args.control == "load" else 0.0)
+    model = Rod3D(rod, n, control=args.control, speed=args.speed, end_load=F if args.control == "load" else 0.0,
+                  preload=F if args.control == "force" else 0.0)
     q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
     n_save = min(args.n_save, 1001)
     limit = step_limit(model, q0)
@@ -94,12 +95,7 @@ def _simulate_rod3d(args, rod) -> int:
         _fail(f"argument --dt: {args.dt!r} s is invalid: the explicit step limit of this rod is {limit:.4g} s; "
               f"use 0 < dt < {limit:.4g} s.")
     dt = 0.5 * limit if args.dt is None else args.dt
-    # ends held after pre-compression: a buckled rod relieves its load and settles near the
-    # amplitude whose end shortening takes up ΔF, so it is called buckled at half that amplitude
-    # (a stable rod sticks below the stick-line amplitude, 0.04 rad at ΔF = 5 N)
-    threshold = 0.5
-    if args.control == "force" and args.dF > 0:
-        threshold = min(0.5, 0.5 * float(theory.held_end_amplitude(rod, args.dF, args.mode)))
+    threshold = float(model.buckle_threshold)  # held ends: half the amplitude that relieves ΔF
     try:
         sol = run(model, q0, v0, args.t1, n_save, dt, threshold=threshold, stop_on_buckle=args.control != "displacement",
                   stop_when_stuck=args.control != "displacement", save_state=args.export is not None)

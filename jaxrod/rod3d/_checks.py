@@ -13,7 +13,7 @@ __all__ = ["check_arguments"]
 CHOICES = {"ends": ("pinned", "fork", "clamped", "free"), "control": ("force", "load", "displacement"),
            "friction_at": ("surface", "axis")}
 # name: (lower bound, bound included, unit)
-RANGES = {"speed": (None, True, "m/s"), "contact_damping": (0.0, True, "s/m"), "damping": (0.0, True, "1/s"),
+RANGES = {"speed": (None, True, "m/s"), "preload": (None, True, "N"), "contact_damping": (0.0, True, "s/m"), "damping": (0.0, True, "1/s"),
           "contact_stiffness": (0.0, False, "N/m^2.5"), "rotary_scale": (1.0, True, "")}
 
 

@@ -20,6 +20,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 from ..models.base import AbstractModel
+from .. import theory
 from ..params import RodChannel
 from ._checks import check_arguments
 from .._numerics import float_leaf
@@ -57,6 +58,9 @@ class Rod3D(AbstractModel):
       and pushed by the constant force `end_load`, as in the reduced models) or
       `"displacement"` (node 0 held, node n pushed along −x at `speed`, E1) (static).
     - `end_load`: the dead load [N] for `control="load"`.
+    - `preload`: for `control="force"`, the uniform compressive force [N] at which the straight
+      rod's ends are held (the default `F` of `initial_state` and `perturbed_state`); it sets
+      the buckling threshold (see `buckle_threshold`).
     - `speed`: pushing speed [m/s] for displacement control (negative: the end is pulled back,
       to unload).
     - `contact_stiffness`: Hertz constant k [N/m^2.5] per unit length; default: the rod sinks
@@ -93,6 +97,7 @@ class Rod3D(AbstractModel):
     friction_at: str = eqx.field(static=True)
     speed: Float[Array, ""]
     end_load: Float[Array, ""]
+    preload: Float[Array, ""]
     contact_stiffness: Float[Array, ""]
     contact_damping: Float[Array, ""]
     damping: Float[Array, ""]
@@ -110,6 +115,7 @@ class Rod3D(AbstractModel):
         control: str = "force",
         speed: ArrayLike = 0.0,
         end_load: ArrayLike = 0.0,
+        preload: ArrayLike = 0.0,
         contact_stiffness: ArrayLike | None = None,
         contact_damping: ArrayLike = 0.0,
         damping: ArrayLike = 0.0,
@@ -130,6 +136,7 @@ class Rod3D(AbstractModel):
         self.gravity = bool(gravity)
         self.speed = float_leaf(speed)
         self.end_load = float_leaf(end_load)
+        self.preload = float_leaf(preload)
         l0 = rod.L / n_segments
         if contact_stiffness is None:
             contact_stiffness = rod.w / (1e-3 * rod.R) ** 1.5
@@ -317,8 +324,27 @@ class Rod3D(AbstractModel):
         return self.control != "displacement"
 
     @property
-    def buckle_threshold(self) -> float:
-        return 0.5
+    def buckle_threshold(self) -> Float[Array, ""]:
+        """The amplitude max|θ| [rad] past which a run counts as buckled: 0.5 rad, as the
+        reduced models, under a dead load (`"load"`: a buckled rod grows without bound) and
+        displacement control; with the ends held after a pre-compression (`"force"`) a buckled
+        rod relieves its load and settles near the amplitude A_held whose end shortening takes
+        up ΔF = `preload` − F⁰ (`jaxrod.theory.held_end_amplitude` of the critical mode: 0.38
+        rad at ΔF = 5 N for the reference rod), so it counts as buckled at min(0.5, ½A_held);
+        a rod that is stable there sticks well below (0.04 rad at ΔF = 5 N, the stick line)."""
+        half = jnp.asarray(0.5, self.rod.L.dtype)
+        if self.control != "force" or not self.channel:
+            return half
+        dF = self.preload - theory.reference_load(self.rod)
+        held = 0.5 * theory.held_end_amplitude(self.rod, dF, theory.critical_mode(self.rod))
+        return jnp.where(dF > 0, jnp.minimum(half, held), half)
+
+    def axial_preload(self) -> Float[Array, ""]:
+        """The axial force of the straight rod the model starts from [N]: `end_load` under a
+        dead load, `preload` with held ends, 0 under displacement control."""
+        if self.control == "load":
+            return self.end_load
+        return self.preload if self.control == "force" else jnp.zeros_like(self.preload)
 
     def observables(self, q: Rod3DPosition, v: Rod3DVelocity, a: Rod3DForces, t=None) -> dict:
         """Recorded at every save: `theta` (n+1,) angle of every node from the channel bottom
@@ -369,7 +395,7 @@ class Rod3D(AbstractModel):
         """ω_max [rad/s] of the linearised conservative dynamics at `q` (default: the straight
         rod under its end load), by power iteration (`jaxrod.rod3d.stiffness.max_frequency`).
         The explicit step limit is 2/ω_max."""
-        return max_frequency(self, self.initial_state(self.end_load)[0] if q is None else q, iters)
+        return max_frequency(self, self.initial_state()[0] if q is None else q, iters)
 
     # -- states ------------------------------------------------------------------------------
     def static_sag(self):
@@ -378,14 +404,16 @@ class Rod3D(AbstractModel):
             return 0.0 * self.rod.R
         return (self.rod.rho * self.rod.g / self.contact_stiffness) ** (2.0 / 3.0)
 
-    def initial_state(self, F: ArrayLike = 0.0, lateral_velocity=None,
+    def initial_state(self, F: ArrayLike | None = None, lateral_velocity=None,
                       lateral_offset=None) -> tuple[Rod3DPosition, Rod3DVelocity]:
         """A straight rod along x on the channel bottom (or on the x axis without a channel),
-        compressed to the uniform axial force `F` [N] (length L(1 − F/EA)), at rest except for
-        an optional lateral (y) velocity [m/s] and lateral offset [m] per node.
+        compressed to the uniform axial force `F` [N] (length L(1 − F/EA); default
+        `axial_preload()`), at rest except for an optional lateral (y) velocity [m/s] and
+        lateral offset [m] per node.
 
         **Returns:** `(q0, v0)`, a [`Rod3DPosition`][] and a [`Rod3DVelocity`][] (every
         contact at rest starts held by static friction)."""
+        F = self.axial_preload() if F is None else F
         return straight_state(self, F, lateral_velocity, lateral_offset)
 
     # -- where a perturbation field is given (the AbstractModel interface) -------------------
@@ -406,10 +434,10 @@ class Rod3D(AbstractModel):
         )
 
     def perturbed_state(self, offset, velocity) -> tuple[Rod3DPosition, Rod3DVelocity]:
-        """The straight rod compressed by its dead load `end_load` [N] (zero under force or
-        displacement control), displaced along the wall by `offset` [m] and moving along it at
-        `velocity` [m/s] at its nodes (see `initial_state`)."""
-        return self.initial_state(self.end_load, lateral_velocity=velocity, lateral_offset=offset)
+        """The straight rod compressed to `axial_preload()` [N] (the dead load, or the preload of
+        held ends), displaced along the wall by `offset` [m] and moving along it at `velocity`
+        [m/s] at its nodes (see `initial_state`)."""
+        return self.initial_state(None, lateral_velocity=velocity, lateral_offset=offset)
 
     # -- observables -------------------------------------------------------------------------
     def theta(self, x) -> Float[Array, " n1"]:
