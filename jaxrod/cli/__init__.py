@@ -59,6 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--plot", default=None, help="write theta(s,t) and the modal spectrum to this PNG")
     sm.add_argument("--export", default=None, metavar="DIR",
                     help="rod3d: write a ParaView time series (DIR/rod.pvd, one .vtu per save) and DIR/rod.gif")
+    sm.add_argument("--quiet", action="store_true", help="no progress bar (rod3d runs)")
     _add_rod_options(sm)
     sm.set_defaults(func=_cmd_simulate)
 

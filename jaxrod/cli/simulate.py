@@ -98,7 +98,8 @@ def _simulate_rod3d(args, rod) -> int:
     threshold = float(model.buckle_threshold)  # held ends: half the amplitude that relieves ΔF
     try:
         sol = run(model, q0, v0, args.t1, n_save, dt, threshold=threshold, stop_on_buckle=args.control != "displacement",
-                  stop_when_stuck=args.control != "displacement", save_state=args.export is not None)
+                  stop_when_stuck=args.control != "displacement", save_state=args.export is not None,
+                  progress=not args.quiet)
     except ValueError as err:
         _fail(str(err))
     if args.export is not None:

@@ -31,11 +31,11 @@ SIZES = {
 
 
 def run(model, q0, v0, t1, n_save, dt, *, threshold=0.5, stop_on_buckle=True, stop_when_stuck=True,
-        save_state=False):
+        save_state=False, progress=False):
     """One [`jaxrod.simulate`][] run of the 3D rod with projected Verlet and the options of
-    [`jaxrod.RunOptions`][] (same names and defaults; vmap it for a batch)."""
+    [`jaxrod.RunOptions`][] (same names and defaults; vmap it for a batch, without `progress`)."""
     opts = RunOptions(buckle_threshold=threshold, stop_on_buckle=stop_on_buckle,
-                      stop_when_stuck=stop_when_stuck, save_state=save_state)
+                      stop_when_stuck=stop_when_stuck, save_state=save_state, progress=progress)
     return simulate(model, ProjectedVerlet(float(dt)), q0, v0, t1, n_save=n_save, options=opts, throw=False)
 
 

@@ -13,6 +13,7 @@ from jaxtyping import Array
 from .._results import RESULTS
 from ..models.base import AbstractModel, friction_work  # noqa: F401 (integrators import it here)
 from ..solution import Solution
+from . import progress
 
 __all__ = ["AbstractIntegrator", "AbstractFixedStep", "RunOptions", "RunState"]
 
@@ -30,6 +31,8 @@ class RunOptions(eqx.Module):
       stopped. Uses a `while_loop`, which forward-mode AD supports but reverse mode does not:
       set `False` for `jax.grad`.
     - `save_state`: keep q and v at every save time (otherwise only the summaries).
+    - `progress`: show a progress bar over the save intervals of a single run (tqdm, through a
+      host callback; leave it off under `vmap`).
     """
 
     buckle_threshold: float | None = eqx.field(static=True, default=None)
@@ -37,6 +40,7 @@ class RunOptions(eqx.Module):
     stop_when_stuck: bool = eqx.field(static=True, default=True)
     early_exit: bool = eqx.field(static=True, default=True)
     save_state: bool = eqx.field(static=True, default=True)
+    progress: bool = eqx.field(static=True, default=False)
 
     def threshold(self, model) -> float:
         return model.buckle_threshold if self.buckle_threshold is None else self.buckle_threshold
@@ -262,6 +266,8 @@ class AbstractFixedStep(AbstractIntegrator):
                 i, s, bufs = state
                 s, rec = interval(s)
                 bufs = jax.tree_util.tree_map(lambda b, x: b.at[i + 1].set(x), bufs, rec)
+                if options.progress:
+                    jax.debug.callback(progress.tick, i + 1, n_save - 1, s.stopped)
                 return i + 1, s, bufs
 
             i_end, s, bufs = jax.lax.while_loop(cond, body, (jnp.array(0), s0, bufs))
@@ -273,7 +279,13 @@ class AbstractFixedStep(AbstractIntegrator):
                 bufs,
             )
         else:
-            s, recs = jax.lax.scan(lambda s, _: interval(s), s0, None, length=n_save - 1)
+            def scan_body(s, i):
+                s, rec = interval(s)
+                if options.progress:
+                    jax.debug.callback(progress.tick, i + 1, n_save - 1, s.stopped)
+                return s, rec
+
+            s, recs = jax.lax.scan(scan_body, s0, jnp.arange(n_save - 1))
             recs = jax.tree_util.tree_map(
                 lambda x0, xs: jnp.concatenate([x0[None], xs]), rec0, recs
             )

@@ -95,55 +95,95 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     W = (W11, W12, W22)
     mu_s, mu_d = model.rod.mu_s, model.rod.mu_d
     in_contact = (N > 0) & movable
-    idx = jnp.arange(model.n + 1)
     bound_s, bound_d = mu_s * N * h, mu_d * N * h
     scale = jnp.maximum(jnp.max(jnp.where(in_contact, bound_s, 0.0)), jnp.finfo(dtype).tiny)
     fm = tuple(f / m for f in free_n)
-    Jc = c3.unpack(Jf)
-    (_, cl_, _, g1l, g2l), (_, cr_, _, g1r, g2r) = sides
+    (_, cl, _, g1l, g2l), (_, cr, _, g1r, g2r) = sides
 
-    def apply(v, w, dp):
-        """Node and segment velocities (component tuples) after the contact impulses
-        `dp` = (p₁, p₂) per node."""
+    # red–black, each colour in arrays of its own: node 2k + c is entry k of colour c, and so is
+    # segment 2k + c (M = ⌈(n + 1)/2⌉ entries; a padded node or segment is inert). Even node k
+    # has segments 2k − 1 (odd k − 1) and 2k (even k) on its left and right, odd node k has
+    # segments 2k (even k) and 2k + 1 (odd k): a half sweep solves only its own contacts.
+    M = (model.n + 2) // 2
+
+    def split(a, fill=0):
+        a = jnp.concatenate([a, jnp.full((2 * M - a.shape[0],) + a.shape[1:], fill, a.dtype)])
+        a = a.reshape((M, 2) + a.shape[1:])
+        return a[:, 0], a[:, 1]
+
+    def split3(t, fill=0):
+        parts = [split(c, fill) for c in t]
+        return tuple(p[0] for p in parts), tuple(p[1] for p in parts)
+
+    def merge(even, odd, size):
+        return jnp.stack([even, odd], 1).reshape((2 * M,) + even.shape[1:])[:size]
+
+    node = [dict() for _ in range(2)]
+    for name, value, fill in (("cl", cl, 0.0), ("cr", cr, 0.0), ("W11", W11, 1.0), ("W12", W12, 0.0),
+                              ("W22", W22, 1.0), ("bound_s", bound_s, 0.0), ("bound_d", bound_d, 0.0),
+                              ("active", in_contact, False)):
+        node[0][name], node[1][name] = split(value, fill)
+    for name, value in (("t2", t2), ("fm", fm), ("g1l", g1l), ("g2l", g2l), ("g1r", g1r), ("g2r", g2r)):
+        node[0][name], node[1][name] = split3(value)
+    Jseg = split3(c3.unpack(Jf))
+
+    def neighbours(c, w):
+        """The spins of the left and right segments of the colour-`c` nodes."""
+        if c == 1:
+            return w[0], w[1]
+        return tuple(jnp.concatenate([jnp.zeros((1,), dtype), a[:-1]]) for a in w[1]), w[0]
+
+    def slip(c, v, w):
+        """Tangential velocities (u₁, u₂) of the colour-`c` contact points."""
+        K = node[c]
+        wl, wr = neighbours(c, w)
+        return (v[0] + K["cl"] * c3.dot(wl, K["g1l"]) + K["cr"] * c3.dot(wr, K["g1r"]),
+                c3.dot(K["t2"], v) + K["cl"] * c3.dot(wl, K["g2l"]) + K["cr"] * c3.dot(wr, K["g2r"]))
+
+    def apply(c, v, w, dp):
+        """Velocities of the colour-`c` nodes and of all segments after their impulses `dp`."""
+        K = node[c]
         p1, p2 = dp
-        v = tuple(v[k] + fm[k] * (p1 * t1[k] + p2 * t2[k]) for k in range(3))
-        tl = tuple(cl_ * (p1 * g1l[k] + p2 * g2l[k]) for k in range(3))  # on segment i − 1
-        tr = tuple(cr_ * (p1 * g1r[k] + p2 * g2r[k]) for k in range(3))  # on segment i
-        return v, tuple(w[k] + Jc[k] * (tr[k][:-1] + tl[k][1:]) for k in range(3))
+        v = (v[0] + K["fm"][0] * p1, v[1] + K["fm"][1] * p2 * K["t2"][1], v[2] + K["fm"][2] * p2 * K["t2"][2])
+        tl = tuple(K["cl"] * (p1 * K["g1l"][k] + p2 * K["g2l"][k]) for k in range(3))  # left segment
+        tr = tuple(K["cr"] * (p1 * K["g1r"][k] + p2 * K["g2r"][k]) for k in range(3))  # right segment
+        if c == 0:  # left: odd segment k − 1, right: even segment k
+            tl = tuple(jnp.concatenate([a[1:], jnp.zeros((1,), dtype)]) for a in tl)
+            we = tuple(w[0][k] + Jseg[0][k] * tr[k] for k in range(3))
+            wo = tuple(w[1][k] + Jseg[1][k] * tl[k] for k in range(3))
+        else:  # left: even segment k, right: odd segment k
+            we = tuple(w[0][k] + Jseg[0][k] * tl[k] for k in range(3))
+            wo = tuple(w[1][k] + Jseg[1][k] * tr[k] for k in range(3))
+        return v, (we, wo)
 
-    def slip(v, w):
-        """Tangential velocities (u₁, u₂) of the contact points."""
-        wl = tuple(_shift(a, "left") for a in w)
-        wr = tuple(_shift(a, "right") for a in w)
-        return (c3.dot(t1, v) + cl_ * c3.dot(wl, g1l) + cr_ * c3.dot(wr, g1r),
-                c3.dot(t2, v) + cl_ * c3.dot(wl, g2l) + cr_ * c3.dot(wr, g2r))
-
-    v, w = c3.unpack(v), c3.unpack(w)
     # warm start: last pass's forces, within this pass's bounds
     p0 = jnp.where(in_contact[:, None], force * h, 0.0)
     cap = jnp.where(stuck, bound_s, bound_d)
     norm = safe_norm(p0)
     p0 = p0 * jnp.where(norm > cap, cap / jnp.where(norm > 0, norm, 1.0), 1.0)[:, None]  # no 0·∞ in a jvp
-    p0 = (p0[:, 0], p0[:, 1])
-    v, w = apply(v, w, p0)
+    p0 = split3((p0[:, 0], p0[:, 1]))
+    vs = list(split3(c3.unpack(v)))
+    w = split3(c3.unpack(w))
+    for c in (0, 1):
+        vs[c], w = apply(c, vs[c], w, p0[c])
 
     def sweep(carry):
-        v, w, stuck, p_acc, _, k = carry
+        vs, w, stucks, p_acc, _, k = carry
+        vs, stucks, p_acc = list(vs), list(stucks), list(p_acc)
         change = jnp.zeros((), dtype)
-        for colour in (0, 1):
-            mine = idx % 2 == colour
-            active = in_contact & mine
-            s1, s2 = slip(v, w)
-            u = (s1 - (W11 * p_acc[0] + W12 * p_acc[1]), s2 - (W12 * p_acc[0] + W22 * p_acc[1]))  # without own impulse
-            p, sticks = friction.impulse_2d(u, W, jnp.where(stuck, bound_s, bound_d), bound_d)
-            p = (jnp.where(active, p[0], 0.0), jnp.where(active, p[1], 0.0))
-            sticks = active & sticks
-            dp = (jnp.where(mine, p[0] - p_acc[0], 0.0), jnp.where(mine, p[1] - p_acc[1], 0.0))
+        for c in (0, 1):
+            K = node[c]
+            s1, s2 = slip(c, vs[c], w)
+            pa = p_acc[c]
+            u = (s1 - (K["W11"] * pa[0] + K["W12"] * pa[1]), s2 - (K["W12"] * pa[0] + K["W22"] * pa[1]))  # without own
+            p, sticks = friction.impulse_2d(u, (K["W11"], K["W12"], K["W22"]),
+                                            jnp.where(stucks[c], K["bound_s"], K["bound_d"]), K["bound_d"])
+            p = (jnp.where(K["active"], p[0], 0.0), jnp.where(K["active"], p[1], 0.0))
+            dp = (p[0] - pa[0], p[1] - pa[1])
             change = jnp.maximum(change, jnp.max(safe_hypot(*dp)))
-            p_acc = (jnp.where(mine, p[0], p_acc[0]), jnp.where(mine, p[1], p_acc[1]))
-            v, w = apply(v, w, dp)
-            stuck = jnp.where(mine, sticks, stuck)
-        return v, w, stuck, p_acc, change / scale, k + 1
+            vs[c], w = apply(c, vs[c], w, dp)
+            p_acc[c], stucks[c] = p, K["active"] & sticks
+        return tuple(vs), w, tuple(stucks), tuple(p_acc), change / scale, k + 1
 
     def more(carry):
         k = carry[-1]
@@ -156,11 +196,14 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         done = ~more(carry)
         return jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), carry, new)
 
-    carry = (v, w, stuck, p0, jnp.zeros((), dtype), 0)
+    carry = (tuple(vs), w, split(stuck, False), p0, jnp.zeros((), dtype), 0)
     if model.friction_sweeps == 1:  # no loop: reverse-mode differentiable
         carry = sweep(carry)
     else:  # one compiled copy of the sweep, in the loop (compile time)
         carry = jax.lax.while_loop(more, body, carry)
-    v, w, stuck, p_acc, residual, _ = carry
-    force = jnp.stack(p_acc, -1) / jnp.where(h > 0, h, 1.0)
-    return c3.pack(v), c3.pack(w), stuck, force, jnp.where(jnp.any(in_contact), residual, 0.0)
+    vs, w, stucks, p_acc, residual, _ = carry
+    n1 = model.n + 1
+    v = jnp.stack([merge(vs[0][k], vs[1][k], n1) for k in range(3)], -1)
+    w = jnp.stack([merge(w[0][k], w[1][k], model.n) for k in range(3)], -1)
+    force = jnp.stack([merge(p_acc[0][a], p_acc[1][a], n1) for a in range(2)], -1) / jnp.where(h > 0, h, 1.0)
+    return v, w, merge(*stucks, n1), force, jnp.where(jnp.any(in_contact), residual, 0.0)
