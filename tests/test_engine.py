@@ -63,6 +63,21 @@ def test_options_have_one_meaning_for_every_model():
         assert int(go_on.n_steps) > int(stop.n_steps), kind
 
 
+@pytest.mark.parametrize("early_exit", [True, False])
+def test_a_run_with_a_progress_bar_equals_one_without(early_exit, capfd):
+    """`RunOptions(progress=True)` reports each save interval to a tqdm bar on stderr (the
+    bar counts to the save interval where the run stops) and changes nothing in the run."""
+    s = Scene(ROD, 5.0, jr.SineVelocity(0.08, 6.0), "field", n=24)
+    q0, v0 = s.initial_state()
+    runs = [jr.simulate(s.model(), s.integrator(), q0, v0, 0.2, n_save=11, throw=False,
+                        options=jr.RunOptions(save_state=False, early_exit=early_exit, progress=p))
+            for p in (False, True)]
+    err = capfd.readouterr().err
+    np.testing.assert_array_equal(runs[0].amplitude, runs[1].amplitude)
+    assert float(runs[0].t_buckle) == float(runs[1].t_buckle) and bool(runs[1].buckled)
+    assert "run:" in err and "save" in err
+
+
 def test_a_traced_smoothing_width_is_differentiable_through_simulate():
     """The step-limit check runs at trace time only when both the model and the scheme's
     parameters are concrete: with a friction smoothing width traced by `jit` (the failure

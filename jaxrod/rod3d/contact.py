@@ -92,7 +92,6 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     # a point that nothing can move (a clamped end) takes no impulse
     movable = (W11 * W22 - W12 * W12) > 0
     W11, W22, W12 = jnp.where(movable, W11, 1.0), jnp.where(movable, W22, 1.0), jnp.where(movable, W12, 0.0)
-    W = (W11, W12, W22)
     mu_s, mu_d = model.rod.mu_s, model.rod.mu_d
     in_contact = (N > 0) & movable
     bound_s, bound_d = mu_s * N * h, mu_d * N * h
