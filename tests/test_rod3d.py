@@ -69,7 +69,7 @@ def test_closed_form_forces_are_minus_the_energy_gradient(control):
         return model.potential(x, Q - jnp.einsum("jab,jbc->jac", skew(dphi), Q))
 
     gx, gphi = jax.jit(jax.grad(U, argnums=(0, 1)))(x, jnp.zeros((20, 3)))
-    f, tau = jax.jit(model.generalized_forces)(x, Q)
+    f, tau = jax.jit(lambda x, Q: model.generalized_forces(x, Q))(x, Q)
     np.testing.assert_allclose(f, -gx, rtol=0, atol=1e-12 * np.max(np.abs(gx)))
     np.testing.assert_allclose(tau, -gphi, rtol=0, atol=1e-12 * np.max(np.abs(gphi)))
 
