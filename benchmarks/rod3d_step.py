@@ -27,10 +27,10 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
 
 
 def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
@@ -40,6 +40,7 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
     jax.config.update("jax_enable_x64", True)
     import jax.numpy as jnp
 
+    from _common import timed
     from jaxrod import theory
     from jaxrod.experiments.rod3d import run
     from jaxrod.params import RodChannel
@@ -63,14 +64,7 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
             cases.append(("batch", batch, jax.jit(jax.vmap(lambda a: one(a, max(100, steps // 4)))),
                           jnp.linspace(5e-3, 40e-3, batch)))
         for kind, B, f, arg in cases:
-            t0 = time.perf_counter()
-            amp, k = jax.block_until_ready(f(arg))
-            compile_s = time.perf_counter() - t0
-            best = float("inf")
-            for _ in range(repeats):
-                t0 = time.perf_counter()
-                jax.block_until_ready(f(arg))
-                best = min(best, time.perf_counter() - t0)
+            (amp, k), compile_s, best = timed(f, arg, repeats=repeats, budget=float("inf"))
             k = int(jnp.max(k))
             rows.append(dict(n=n, setting=label, kind=kind, batch=B, steps=k, dt=dt, seconds=best,
                              us_per_rod_step=best / k / B * 1e6, compile_s=compile_s,
@@ -115,7 +109,6 @@ def main():
     finally:
         if tmp:
             subprocess.run(["git", "-C", ROOT, "worktree", "remove", "--force", tmp], capture_output=True)
-    sys.path.insert(0, HERE)
     from _common import write_csv
 
     write_csv(args.out, rows)

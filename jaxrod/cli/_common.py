@@ -85,14 +85,23 @@ def _check_writable(option: str, path: str, folder: bool = True) -> None:
         _fail(f"argument {option}: cannot write to {path!r}: {err.strerror or err}.")
 
 
-def _positive_int(text: str) -> int:
-    try:
-        x = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid integer: {text!r}") from None
-    if x < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
-    return x
+def _int_at_least(lo: int):
+    """An argparse type: an int ≥ `lo`."""
+
+    def parse(text: str) -> int:
+        try:
+            x = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"invalid integer: {text!r}") from None
+        if x < lo:
+            raise argparse.ArgumentTypeError(f"{text!r} must be >= {lo}")
+        return x
+
+    return parse
+
+
+_positive_int = _int_at_least(1)
+_nonnegative_int = _int_at_least(0)
 
 
 def _range_spec(text: str):

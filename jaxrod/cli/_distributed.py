@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import _fail, _positive_int
+from ._common import _fail, _nonnegative_int, _positive_int
 
 # library argument -> option (the library names the setting an error is about)
 _OPTIONS = {"coordinator_address": "--coordinator", "num_processes": "--num-processes", "process_id": "--process-id"}
@@ -16,16 +16,6 @@ def _host_port(text: str) -> str:
     if not host or not port.isdigit() or not 1 <= int(port) <= 65535:
         raise argparse.ArgumentTypeError(f"{text!r} is not of the form HOST:PORT (port 1-65535)")
     return text
-
-
-def _nonnegative_int(text: str) -> int:
-    try:
-        x = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"invalid integer: {text!r}") from None
-    if x < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
-    return x
 
 
 def _add_distributed_options(p: argparse.ArgumentParser) -> None:

@@ -12,7 +12,7 @@ from jaxtyping import Array, Float
 
 from . import components as c3
 
-__all__ = ['strains', 'elastic_terms', 'penetration', 'contact_energy', 'external_energy', 'potential', 'kinetic_terms', 'generalized_forces', 'contact_normal', 'forces']
+__all__ = ['strains', 'elastic_terms', 'penetration', 'contact_energy', 'external_energy', 'potential', 'kinetic_terms', 'generalized_forces', 'contact_normal', 'forces', 'impulse_work']
 
 E3 = np.array([0.0, 0.0, 1.0])
 
@@ -169,3 +169,18 @@ def forces(model, x, Q, v):
     cm = model.damping * model.mass
     f_damp = tuple(-N_damp * e_r[k] - cm * V[k] for k in range(3))
     return c3.pack(c3.add(f, f_damp)), c3.pack(tau), N, c3.pack(f_damp)
+
+
+def impulse_work(model, v_prev, v_trial, v_after, a, h):
+    """`(lost, work_in)` over a half step `h`: the energy removed by the friction impulse
+    (impulse · mean velocity, the reduced models' midpoint rule) and by damping, and the work of
+    the pushed end (its support force times its prescribed velocity) [J]."""
+    mean_v = 0.5 * (v_prev.v + v_after.v)
+    lost = (jnp.sum(model.mass[:, None] * (v_trial.v - v_after.v) * mean_v)
+            + jnp.sum(model.inertia[None, :] * (v_trial.w - v_after.w) * 0.5 * (v_prev.w + v_after.w))
+            - h * jnp.sum(a.fd * mean_v))
+    if model.control == "displacement":
+        work_in = -h * a.f[-1, 0] * v_after.v[-1, 0]
+    else:
+        work_in = jnp.zeros_like(lost)
+    return lost, work_in

@@ -20,14 +20,14 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 from ..models.base import AbstractModel
-from .. import theory
 from ..params import RodChannel
 from ._checks import check_arguments
 from .._numerics import float_leaf
 from . import energy
 from .contact import friction_pass
 from . import components as c3
-from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, straight_state, wall_angle
+from . import measures
+from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
 from .stiffness import max_frequency
 
 __all__ = ["Rod3D"]
@@ -247,10 +247,7 @@ class Rod3D(AbstractModel):
     # -- the model interface: the pieces of a projected Verlet step ----------------------------
     def acceleration(self, q: Rod3DPosition, t=None) -> Rod3DForces:
         """The conservative forces at `q` (those of a rod at rest)."""
-        zero = Rod3DVelocity(jnp.zeros_like(q.x), jnp.zeros(q.Q.shape[:-1], q.x.dtype),
-                             jnp.zeros(q.x.shape[:1], bool), jnp.zeros(q.x.shape[:1] + (2,), q.x.dtype),
-                             jnp.zeros((), q.x.dtype))
-        return self.accelerations(q, zero, t)
+        return self.accelerations(q, at_rest(q), t)
 
     def accelerations(self, q: Rod3DPosition, v: Rod3DVelocity, t=None) -> Rod3DForces:
         """Forces, torques and wall forces at `q` with velocities `v` (contact and viscous
@@ -274,8 +271,7 @@ class Rod3D(AbstractModel):
         return Rod3DPosition(q.x + h * v.v, c3.pack_matrix(c3.rotate(c3.scale(-h, c3.unpack(v.w)), c3.unpack_matrix(q.Q))))
 
     def friction_bounds(self, t=None):
-        """The friction coefficients (μ_s, μ_d): the rod's bounds are μ N per contact, with N
-        from the state (see `friction_update`)."""
+        """(μ_s, μ_d): the bounds are μ N per contact, N from the state (`friction_update`)."""
         return self.rod.mu_s, self.rod.mu_d
 
     def friction_update(self, friction, v_trial: Rod3DVelocity, v_prev: Rod3DVelocity, h, t=None,
@@ -292,32 +288,16 @@ class Rod3D(AbstractModel):
 
     def impulse_work(self, v_prev: Rod3DVelocity, v_trial: Rod3DVelocity, v_after: Rod3DVelocity,
                      a: Rod3DForces, h):
-        """`(lost, work_in)` over a half step `h`: the energy removed by the friction impulse
-        (impulse · mean velocity, the reduced models' midpoint rule) and by damping, and the work
-        of the pushed end (its support force times its prescribed velocity) [J]."""
-        mean_v = 0.5 * (v_prev.v + v_after.v)
-        lost = (jnp.sum(self.mass[:, None] * (v_trial.v - v_after.v) * mean_v)
-                + jnp.sum(self.inertia[None, :] * (v_trial.w - v_after.w) * 0.5 * (v_prev.w + v_after.w))
-                - h * jnp.sum(a.fd * mean_v))
-        if self.control == "displacement":
-            work_in = -h * a.f[-1, 0] * v_after.v[-1, 0]
-        else:
-            work_in = jnp.zeros_like(lost)
-        return lost, work_in
+        """`(lost, work_in)` over a half step `h` [J] (`jaxrod.rod3d.energy.impulse_work`)."""
+        return energy.impulse_work(self, v_prev, v_trial, v_after, a, h)
 
     def amplitude(self, q: Rod3DPosition) -> Float[Array, ""]:
-        """max |θ| over the interior nodes [rad] (0 without a channel: θ is an angle on its wall)."""
-        if not self.channel:
-            return jnp.zeros((), q.x.dtype)
-        return jnp.max(jnp.abs(self.theta(q.x)[1:-1]))
+        """max |θ| over the interior nodes [rad] (`jaxrod.rod3d.measures.amplitude`)."""
+        return measures.amplitude(self, q)
 
     def stop_measures(self, q, v: Rod3DVelocity, a, t=None):
-        """The amplitude, and whether every free node is at rest and held by static friction
-        at the last impulse (under a constant load nothing can then release it)."""
-        held, _ = self.held()
-        free = ~jnp.any(held, -1)
-        stuck = jnp.all(jnp.where(free, v.stuck, True)) & jnp.all(jnp.where(free[:, None], v.v == 0, True))
-        return self.amplitude(q), stuck
+        """The amplitude and the stick test (`jaxrod.rod3d.measures.stop_measures`)."""
+        return measures.stop_measures(self, q, v)
 
     @property
     def autonomous(self) -> bool:
@@ -325,19 +305,9 @@ class Rod3D(AbstractModel):
 
     @property
     def buckle_threshold(self) -> Float[Array, ""]:
-        """The amplitude max|θ| [rad] past which a run counts as buckled: 0.5 rad, as the
-        reduced models, under a dead load (`"load"`: a buckled rod grows without bound) and
-        displacement control; with the ends held after a pre-compression (`"force"`) a buckled
-        rod relieves its load and settles near the amplitude A_held whose end shortening takes
-        up ΔF = `preload` − F⁰ (`jaxrod.theory.held_end_amplitude` of the critical mode: 0.38
-        rad at ΔF = 5 N for the reference rod), so it counts as buckled at min(0.5, ½A_held);
-        a rod that is stable there sticks well below (0.04 rad at ΔF = 5 N, the stick line)."""
-        half = jnp.asarray(0.5, self.rod.L.dtype)
-        if self.control != "force" or not self.channel:
-            return half
-        dF = self.preload - theory.reference_load(self.rod)
-        held = 0.5 * theory.held_end_amplitude(self.rod, dF, theory.critical_mode(self.rod))
-        return jnp.where(dF > 0, jnp.minimum(half, held), half)
+        """The buckling amplitude [rad] of this control: 0.5 under a dead load or displacement
+        control, min(0.5, ½A_held) with held ends (`jaxrod.rod3d.measures.buckle_threshold`)."""
+        return measures.buckle_threshold(self)
 
     def axial_preload(self) -> Float[Array, ""]:
         """The axial force of the straight rod the model starts from [N]: `end_load` under a
@@ -347,27 +317,11 @@ class Rod3D(AbstractModel):
         return self.preload if self.control == "force" else jnp.zeros_like(self.preload)
 
     def observables(self, q: Rod3DPosition, v: Rod3DVelocity, a: Rod3DForces, t=None) -> dict:
-        """Recorded at every save: `theta` (n+1,) angle of every node from the channel bottom
-        [rad], directly comparable with the field model's θ(s, t); `reaction` (2,) compressive
-        support forces along x at node 0 and node n [N]; `end_x` position of the pushed end
-        along x [m]; `normal_force` (n+1,) wall force per length [N/m]; `axial_force` (n,)
-        compressive force of every segment [N]; `height` largest height of the centre line
-        above the channel bottom [m]; `gap` largest distance of a node inside the clearance
-        circle, R − r [m] (> 0 where the rod has lifted off the wall); `friction_residual` the
-        relative residual of the last friction pass (see `friction_tol`)."""
-        x = q.x
-        return dict(
-            theta=self.theta(x),
-            reaction=jnp.stack([-a.f[0, 0], a.f[-1, 0]]),
-            end_x=x[-1, 0],
-            normal_force=self.contact_normal(x, v.v)[0] / self.voronoi,
-            axial_force=self.axial_force(x, q.Q),
-            height=jnp.max(x[:, 2]) + self.rod.R + self.static_sag(),
-            gap=jnp.max(-self.penetration(x)[0]) if self.channel else jnp.zeros((), x.dtype),
-            friction_residual=v.residual,
-        )
+        """θ per node, end reactions, end position, wall and axial forces, height, gap and the
+        friction residual at a save (`jaxrod.rod3d.measures.observables` lists them)."""
+        return measures.observables(self, q, v, a)
 
-    # -- forces ----------------------------------------------------------------------------
+    # -- forces and friction ---------------------------------------------------------------
     def generalized_forces(self, x, Q):
         return energy.generalized_forces(self, x, Q)
 
@@ -377,11 +331,9 @@ class Rod3D(AbstractModel):
     def forces(self, x, Q, v):
         return energy.forces(self, x, Q, v)
 
-    # -- friction ----------------------------------------------------------------------------
     def friction_step(self, friction, x, v, Q, w, N, stuck, force, h):
-        """The friction impulses of a (half) step `h` [s] under the law `friction`, even nodes
-        then odd nodes, started from the last pass's forces (`jaxrod.rod3d.contact.friction_pass`).
-        Returns the new (v, w, stuck, force, residual)."""
+        """The friction impulses of a (half) step `h` [s] under the law `friction`: the new
+        (v, w, stuck, force, residual) (`jaxrod.rod3d.contact.friction_pass`)."""
         return friction_pass(self, friction, x, v, Q, w, N, stuck, force, h)
 
     # -- constraints and the step limit -------------------------------------------------------
@@ -428,10 +380,8 @@ class Rod3D(AbstractModel):
         return self.n - 1
 
     def from_samples(self, values):
-        raise TypeError(
-            "Rod3D has no coordinates per sample point: a lateral field becomes a state through "
-            "Rod3D.perturbed_state (RandomForce and UserState fields are not available with the 3D rod)."
-        )
+        raise TypeError("Rod3D has no coordinates per sample point: a lateral field becomes a state through "
+                        "Rod3D.perturbed_state (RandomForce and UserState fields are not available with the 3D rod).")
 
     def perturbed_state(self, offset, velocity) -> tuple[Rod3DPosition, Rod3DVelocity]:
         """The straight rod compressed to `axial_preload()` [N] (the dead load, or the preload of

@@ -10,7 +10,7 @@ from jaxtyping import Array, ArrayLike, Bool, Float
 from .._numerics import float_leaf, safe_norm
 
 
-__all__ = ["Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "straight_state", "wall_angle", "sine_velocity"]
+__all__ = ["Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "at_rest", "straight_state", "wall_angle", "sine_velocity"]
 
 
 class Rod3DPosition(eqx.Module):
@@ -46,6 +46,13 @@ class Rod3DForces(eqx.Module):
     tau: Float[Array, "n 3"]
     N: Float[Array, " n1"]
     fd: Float[Array, "n1 3"]
+
+
+def at_rest(q: Rod3DPosition) -> Rod3DVelocity:
+    """Velocities of a rod at rest at `q`: no motion, no contact held, no friction memory."""
+    x = q.x
+    return Rod3DVelocity(jnp.zeros_like(x), jnp.zeros(q.Q.shape[:-1], x.dtype), jnp.zeros(x.shape[:1], bool),
+                         jnp.zeros(x.shape[:1] + (2,), x.dtype), jnp.zeros((), x.dtype))
 
 
 def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_offset=None):

@@ -1,0 +1,65 @@
+"""What a run of the 3D rod records and how it is judged: the amplitude, the stick test, the
+buckling threshold of each control, and the observables at a save. Functions of the model
+(`jaxrod.rod3d.Rod3D` calls them as methods)."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from .. import theory
+
+__all__ = ["amplitude", "stop_measures", "buckle_threshold", "observables"]
+
+
+def amplitude(model, q):
+    """max |θ| over the interior nodes [rad] (0 without a channel: θ is an angle on its wall)."""
+    if not model.channel:
+        return jnp.zeros((), q.x.dtype)
+    return jnp.max(jnp.abs(model.theta(q.x)[1:-1]))
+
+
+def stop_measures(model, q, v):
+    """The amplitude, and whether every free node is at rest and held by static friction at the
+    last impulse (under a constant load nothing can then release it)."""
+    held, _ = model.held()
+    free = ~jnp.any(held, -1)
+    stuck = jnp.all(jnp.where(free, v.stuck, True)) & jnp.all(jnp.where(free[:, None], v.v == 0, True))
+    return amplitude(model, q), stuck
+
+
+def buckle_threshold(model):
+    """The amplitude max|θ| [rad] past which a run counts as buckled: 0.5 rad, as the reduced
+    models, under a dead load (`"load"`: a buckled rod grows without bound) and displacement
+    control; with the ends held after a pre-compression (`"force"`) a buckled rod relieves its
+    load and settles near the amplitude A_held whose end shortening takes up ΔF = `preload` − F⁰
+    (`jaxrod.theory.held_end_amplitude` of the critical mode: 0.38 rad at ΔF = 5 N for the
+    reference rod), so it counts as buckled at min(0.5, ½A_held); a rod that is stable there
+    sticks well below (0.04 rad at ΔF = 5 N, the stick line)."""
+    half = jnp.asarray(0.5, model.rod.L.dtype)
+    if model.control != "force" or not model.channel:
+        return half
+    dF = model.preload - theory.reference_load(model.rod)
+    held = 0.5 * theory.held_end_amplitude(model.rod, dF, theory.critical_mode(model.rod))
+    return jnp.where(dF > 0, jnp.minimum(half, held), half)
+
+
+def observables(model, q, v, a) -> dict:
+    """Recorded at every save: `theta` (n+1,) angle of every node from the channel bottom [rad],
+    directly comparable with the field model's θ(s, t); `reaction` (2,) compressive support
+    forces along x at node 0 and node n [N]; `end_x` position of the pushed end along x [m];
+    `normal_force` (n+1,) wall force per length [N/m]; `axial_force` (n,) compressive force of
+    every segment [N]; `height` largest height of the centre line above the channel bottom [m];
+    `gap` largest distance of a node inside the clearance circle, R − r [m] (> 0 where the rod
+    has lifted off the wall); `friction_residual` the relative residual of the last friction
+    pass (see `Rod3D.friction_tol`)."""
+    x = q.x
+    return dict(
+        theta=model.theta(x),
+        reaction=jnp.stack([-a.f[0, 0], a.f[-1, 0]]),
+        end_x=x[-1, 0],
+        normal_force=model.contact_normal(x, v.v)[0] / model.voronoi,
+        axial_force=model.axial_force(x, q.Q),
+        height=jnp.max(x[:, 2]) + model.rod.R + model.static_sag(),
+        gap=jnp.max(-model.penetration(x)[0]) if model.channel else jnp.zeros((), x.dtype),
+        friction_residual=v.residual,
+    )
