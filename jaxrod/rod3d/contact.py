@@ -1,5 +1,6 @@
-"""The wall friction pass of the 3D rod: contact frames at the contact points, each node's share
-of its segments' spin, and the red–black projected impulses (the law's `impulse_2d`)."""
+"""The wall friction pass of the 3D rod: the contact points' tangent frames and inverse masses,
+each node's share of its segments' spin, and the red–black projected impulses (the law's
+`impulse_2d`)."""
 
 from __future__ import annotations
 
@@ -11,22 +12,12 @@ from .._numerics import safe_hypot, safe_norm
 from . import components as c3
 from .energy import _penetration, _shift
 
-__all__ = ["contact_frames", "node_weights", "friction_pass"]
-
-
-def contact_frames(model, x):
-    """The tangent frame of every contact, t₁ = x̂ (axial) and t₂ = x̂ × e_r (lateral, along the
-    wall), as (n+1, 2, 3), and the contact point's offset r_c = (d/2) e_r from the centre line
-    (zero with `friction_at="axis"`)."""
-    _, e_r = model.penetration(x)
-    t1 = jnp.broadcast_to(jnp.array([1.0, 0.0, 0.0], x.dtype), e_r.shape)
-    t2 = jnp.stack([jnp.zeros_like(e_r[:, 0]), -e_r[:, 2], e_r[:, 1]], -1)  # x̂ × e_r
-    T = jnp.stack([t1, t2], -2)  # (n1, 2, 3)
-    rc = _arm(model, x.dtype) * e_r
-    return T, rc
+__all__ = ["node_weights", "friction_pass"]
 
 
 def _arm(model, dtype):
+    """|r_c|: the contact point's distance from the centre line (d/2, or 0 with friction at the
+    axis)."""
     return jnp.asarray(0.5 * model.rod.d if model.friction_at == "surface" else 0.0, dtype)
 
 
