@@ -1,0 +1,184 @@
+"""E3 with the full model: the stable-zone boundary v₀*(ΔF) of the 3D rod and its exponent.
+
+The field model's map (`experiments.e3`) fits v₀ ∝ ΔF^p to a grid of 20 × 24 runs. The 3D rod
+costs 10⁴ times more per run, so its boundary is found point by point: at each load, label
+bisection in v₀ on the common engine's scene ([`jaxrod.scene.Scene`][] `kind="rod3d"`: dead
+load F⁰₆ + ΔF, friction at the contact point, sine mode-6 lateral velocity, buckled when
+max|θ| passes 0.5 rad, a run stops when it buckles or sticks), one compiled run reused by every
+load and amplitude. The first bracket is ±`width` around the field model's v₀* at that load —
+only a starting guess: every bracket is checked by two 3D runs and widened until it holds the
+boundary. Each load's search depends on nothing but its load, so loads can be split between
+processes that share the runs file.
+
+Every run is appended to a CSV as it finishes (`runs.csv`): a search that is stopped and
+restarted replays its finished runs from that file and loses nothing.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import theory
+from ..boundary.indicators import crossing_state
+from ..params import RodChannel
+from ..perturbations import SineVelocity
+from ..scene import ROD3D_DT_FRACTION, Scene
+from ..stability_map import fit_power_law
+
+__all__ = ["boundary_3d", "RUN_COLUMNS"]
+
+RUN_COLUMNS = ["dF", "n_segments", "mu", "t1", "dt", "v0", "buckled", "seconds"]
+
+
+def _runs_of(path, n, mu, t1, dt):
+    """Finished runs {(ΔF, v₀): buckled} of the same settings from the CSV at `path`."""
+    done = {}
+    if path and os.path.exists(path):
+        with open(path) as fh:
+            for r in csv.DictReader(fh):
+                same = (int(r["n_segments"]) == n and math.isclose(float(r["mu"]), mu)
+                        and math.isclose(float(r["t1"]), t1) and math.isclose(float(r["dt"]), dt, rel_tol=1e-9))
+                if same:
+                    done[(float(r["dF"]), float(r["v0"]))] = r["buckled"] == "1"
+    return done
+
+
+def _append(path, row):
+    if not path:
+        return
+    new = not os.path.exists(path)
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    with open(path, "a", newline="") as fh:
+        w = csv.DictWriter(fh, RUN_COLUMNS)
+        if new:
+            w.writeheader()
+        w.writerow(row)
+
+
+def _bisect(label, guess, width, rtol, max_runs):
+    """The boundary of a label monotone in v₀ (False below, True above) from a first bracket
+    guess·(1 ∓ width): widened geometrically (×(1 + 2·width) per try, doubling) until its ends
+    differ, then bisected geometrically until hi/lo − 1 ≤ `rtol`.
+
+    **Returns:** `(lo, hi)` (largest stable, smallest buckled amplitude tested) or `None` when
+    `max_runs` labels did not bracket it."""
+    lo, hi = guess * (1 - width), guess * (1 + width)
+    b_lo, b_hi = label(lo), label(hi)
+    runs, step = 2, 1 + 2 * width
+    while b_lo == b_hi:
+        if runs >= max_runs:
+            return None
+        if b_lo:  # both buckled: the boundary lies below
+            hi, lo = lo, lo / step
+            b_lo = label(lo)
+        else:
+            lo, hi = hi, hi * step
+            b_hi = label(hi)
+        runs += 1
+        step *= step
+    while hi / lo - 1 > rtol and runs < max_runs:
+        mid = math.sqrt(lo * hi)
+        if label(mid):
+            hi = mid
+        else:
+            lo = mid
+        runs += 1
+    return lo, hi
+
+
+def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=16, runs_csv=None,
+                progress=True):
+    """v₀*(ΔF) [m/s] of the 3D rod of `n` segments at each load `dFs` [N] above F⁰₆ (label
+    bisection to `rtol` relative bracket width), next to the field model's converged boundary
+    search, and the power laws v₀* ∝ ΔF^p fitted to each.
+
+    **Arguments:** `t1` the horizon [s] (a run that neither sticks nor buckles by then is
+    stable), `width` the half-width of the first bracket (relative), `max_runs` per load,
+    `runs_csv` the file every finished run is appended to and replayed from.
+
+    **Returns:** dict with `points` (per load: `dF`, `field`, `rod3d`, `bracket`, `runs`,
+    `seconds`), `exponent_rod3d` ± `exponent_rod3d_stderr`, `exponent_field` ± its stderr (the
+    same loads), `exponent_theory` (−0.5) and the settings.
+    """
+    from ..boundary import critical_velocity
+
+    rod = RodChannel.reference(mu)
+    dFs = np.sort(np.asarray(dFs, float))
+    # one step for every load (the step limit barely moves with the load): one compiled run
+    dt = min(Scene(rod, float(dF), SineVelocity(1e-3), kind="rod3d", n=n).step() for dF in dFs)
+
+    @jax.jit
+    def buckled(dF, v0):
+        return crossing_state(Scene(rod, dF, SineVelocity(v0), kind="rod3d", n=n, dt=dt), t1)[1]
+
+    done = _runs_of(runs_csv, n, mu, t1, dt)
+    points = []
+    for dF in dFs:
+        t0 = time.perf_counter()
+        r, _ = critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
+        v_field = float(r.root)
+        count = [0, 0.0]
+
+        def label(v0, dF=float(dF)):
+            key = (dF, float(v0))
+            if key not in done:
+                t = time.perf_counter()
+                done[key] = bool(buckled(jnp.asarray(dF), jnp.asarray(v0)))
+                sec = time.perf_counter() - t
+                count[1] += sec
+                _append(runs_csv, dict(dF=dF, n_segments=n, mu=mu, t1=t1, dt=dt, v0=float(v0),
+                                       buckled=int(done[key]), seconds=round(sec, 2)))
+                if progress:
+                    print(f"  ΔF = {dF:g} N, v0 = {1e3 * v0:.3f} mm/s: {'buckled' if done[key] else 'stable'}"
+                          f" ({sec:.0f} s)", flush=True)
+            count[0] += 1
+            return done[key]
+
+        br = _bisect(label, v_field, width, rtol, max_runs)
+        v3 = math.sqrt(br[0] * br[1]) if br else math.nan
+        points.append(dict(dF=float(dF), field=v_field, rod3d=v3, bracket=list(br) if br else None,
+                           runs=count[0], seconds_new_runs=round(count[1], 1),
+                           seconds=round(time.perf_counter() - t0, 1)))
+        if progress:
+            print(f"ΔF = {dF:g} N: 3D {1e3 * v3:.3f} mm/s, field {1e3 * v_field:.3f} mm/s "
+                  f"({100 * (v3 / v_field - 1):+.1f} %)", flush=True)
+    ok = [p for p in points if p["bracket"]]
+    p3, se3, c3 = fit_power_law([p["dF"] for p in ok], [p["rod3d"] for p in ok])
+    pf, sef, cf = fit_power_law([p["dF"] for p in points], [p["field"] for p in points])
+    return dict(points=points, exponent_rod3d=p3, exponent_rod3d_stderr=se3, prefactor_rod3d=c3,
+                exponent_field=pf, exponent_field_stderr=sef, prefactor_field=cf, exponent_theory=-0.5,
+                n_segments=n, mu=mu, t1=t1, dt=dt, rtol=rtol, F0=float(theory.reference_load(rod)))
+
+
+def plot_boundary_3d(res, path=None):
+    """The 3D and field boundaries with their fitted power laws (log–log); returns the Figure."""
+    from ..output import subplots
+
+    fig, ax = subplots(figsize=(5.5, 4.2))
+    pts = res["points"]
+    dF = np.array([p["dF"] for p in pts])
+    fine = np.geomspace(dF.min(), dF.max(), 50)
+    ax.loglog(dF, [1e3 * p["field"] for p in pts], "s", mfc="none", label="field model (boundary search)")
+    ax.loglog(fine, 1e3 * res["prefactor_field"] * fine ** res["exponent_field"], "C0-", lw=0.8,
+              label=f"fit: ΔF^({res['exponent_field']:.3f} ± {res['exponent_field_stderr']:.3f})")
+    ok = [p for p in pts if p["bracket"]]
+    ax.errorbar([p["dF"] for p in ok], [1e3 * p["rod3d"] for p in ok],
+                yerr=np.array([[1e3 * (p["rod3d"] - p["bracket"][0]), 1e3 * (p["bracket"][1] - p["rod3d"])] for p in ok]).T,
+                fmt="o", color="C3", ms=4, label=f"3D rod, {res['n_segments']} segments (bracket)")
+    ax.loglog(fine, 1e3 * res["prefactor_rod3d"] * fine ** res["exponent_rod3d"], "C3--", lw=0.8,
+              label=f"fit: ΔF^({res['exponent_rod3d']:.3f} ± {res['exponent_rod3d_stderr']:.3f})")
+    ax.set_xlabel("ΔF = F − F⁰₆ [N]")
+    ax.set_ylabel("critical sine velocity v₀* [mm/s]")
+    ax.set_title(f"E3 boundary, μ = {res['mu']}: 3D rod against the field model", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    if path:
+        fig.savefig(path, dpi=130)
+    return fig
