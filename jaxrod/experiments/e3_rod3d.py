@@ -4,8 +4,9 @@ The field model's map (`experiments.e3`) fits v₀ ∝ ΔF^p to a grid of 20 × 
 costs 10⁴ times more per run, so its boundary is found point by point: at each load, label
 bisection in v₀ on the common engine's scene ([`jaxrod.scene.Scene`][] `kind="rod3d"`: dead
 load F⁰₆ + ΔF, friction at the contact point, sine mode-6 lateral velocity, buckled when
-max|θ| passes 0.5 rad, a run stops when it buckles or sticks), one compiled run reused by every
-load and amplitude. The first bracket is ±`width` around the field model's v₀* at that load —
+max|θ| passes 0.5 rad, a run stops when it buckles or sticks; the same run built directly so
+that friction can be placed at the centre line too), one compiled run reused by every load and
+amplitude. The first bracket is ±`width` around the field model's v₀* at that load —
 only a starting guess: every bracket is checked by two 3D runs and widened until it holds the
 boundary. Each load's search depends on nothing but its load, so loads can be split between
 processes that share the runs file.
@@ -26,25 +27,55 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import theory
-from ..boundary.indicators import crossing_state
 from ..params import RodChannel
 from ..perturbations import SineVelocity
-from ..scene import ROD3D_DT_FRACTION, Scene
+from ..scene import Scene
 from ..stability_map import fit_power_law
 
 __all__ = ["boundary_3d", "RUN_COLUMNS"]
 
-RUN_COLUMNS = ["dF", "n_segments", "mu", "t1", "dt", "v0", "buckled", "seconds"]
+DT_RTOL = 1e-3
+RUN_COLUMNS = ["dF", "n_segments", "mu", "friction_at", "ends", "sink", "t1", "dt", "v0", "buckled", "seconds"]
+SINK = 1e-3  # the 3D rod's default contact: it sinks 1e-3·R into the wall under its weight
 
 
-def _runs_of(path, n, mu, t1, dt):
-    """Finished runs {(ΔF, v₀): buckled} of the same settings from the CSV at `path`."""
+def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK):
+    """The jitted label (ΔF [N], v₀ [m/s]) → buckled of the 3D rod of `n` segments under the
+    dead load F⁰₆ + ΔF with a sine mode-6 lateral velocity v₀: the run of
+    [`jaxrod.boundary.crossing_state`][] (stops when it buckles or sticks, at most `t1` [s],
+    step `dt` [s]) — with the defaults the same run as the scene `Scene(kind="rod3d")`, with
+    `friction_at` and `ends` passed to [`jaxrod.rod3d.Rod3D`][], the wall's Hertz constant set so
+    that the rod sinks `sink`·R into it under its weight (`Rod3D`'s default: 1e-3)."""
+    from ..integrators import ProjectedVerlet
+    from ..integrators.base import RunOptions
+    from ..rod3d import Rod3D
+    from ..simulate import simulate
+
+    integrator = ProjectedVerlet(dt)
+
+    @jax.jit
+    def buckled(dF, v0):
+        model = Rod3D(rod, n, control="load", end_load=theory.reference_load(rod) + dF, friction_at=friction_at,
+                      ends=ends, contact_stiffness=rod.w / (sink * rod.R) ** 1.5)
+        q0, v0 = SineVelocity(v0).initial_state(model, integrator)
+        opts = RunOptions(buckle_threshold=0.5, save_state=False)  # the dead load's threshold
+        return simulate(model, integrator, q0, v0, t1, n_save=201, options=opts, throw=False).buckled
+
+    return buckled
+
+
+def _runs_of(path, n, mu, t1, dt, friction_at, ends, sink):
+    """Finished runs {(ΔF, v₀): buckled} of the same settings from the CSV at `path` (a step
+    within `DT_RTOL` of `dt` counts as the same: a call takes the smallest step of its loads,
+    and the step limit moves by ~1e-5 relative between loads)."""
     done = {}
     if path and os.path.exists(path):
         with open(path) as fh:
             for r in csv.DictReader(fh):
                 same = (int(r["n_segments"]) == n and math.isclose(float(r["mu"]), mu)
-                        and math.isclose(float(r["t1"]), t1) and math.isclose(float(r["dt"]), dt, rel_tol=1e-9))
+                        and r["friction_at"] == friction_at and r["ends"] == ends
+                        and math.isclose(float(r["sink"]), sink)
+                        and math.isclose(float(r["t1"]), t1) and math.isclose(float(r["dt"]), dt, rel_tol=DT_RTOL))
                 if same:
                     done[(float(r["dF"]), float(r["v0"]))] = r["buckled"] == "1"
     return done
@@ -94,14 +125,15 @@ def _bisect(label, guess, width, rtol, max_runs):
 
 
 def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=16, runs_csv=None,
-                progress=True):
+                friction_at="surface", ends="pinned", sink=SINK, progress=True):
     """v₀*(ΔF) [m/s] of the 3D rod of `n` segments at each load `dFs` [N] above F⁰₆ (label
     bisection to `rtol` relative bracket width), next to the field model's converged boundary
     search, and the power laws v₀* ∝ ΔF^p fitted to each.
 
     **Arguments:** `t1` the horizon [s] (a run that neither sticks nor buckles by then is
     stable), `width` the half-width of the first bracket (relative), `max_runs` per load,
-    `runs_csv` the file every finished run is appended to and replayed from.
+    `runs_csv` the file every finished run is appended to and replayed from, `friction_at` and
+    `ends` passed to [`jaxrod.rod3d.Rod3D`][], `sink` the wall's compliance (see `label_3d`).
 
     **Returns:** dict with `points` (per load: `dF`, `field`, `rod3d`, `bracket`, `runs`,
     `seconds`), `exponent_rod3d` ± `exponent_rod3d_stderr`, `exponent_field` ± its stderr (the
@@ -114,11 +146,8 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     # one step for every load (the step limit barely moves with the load): one compiled run
     dt = min(Scene(rod, float(dF), SineVelocity(1e-3), kind="rod3d", n=n).step() for dF in dFs)
 
-    @jax.jit
-    def buckled(dF, v0):
-        return crossing_state(Scene(rod, dF, SineVelocity(v0), kind="rod3d", n=n, dt=dt), t1)[1]
-
-    done = _runs_of(runs_csv, n, mu, t1, dt)
+    buckled = label_3d(rod, n, dt, t1, friction_at, ends, sink)
+    done = _runs_of(runs_csv, n, mu, t1, dt, friction_at, ends, sink)
     points = []
     for dF in dFs:
         t0 = time.perf_counter()
@@ -133,7 +162,8 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
                 done[key] = bool(buckled(jnp.asarray(dF), jnp.asarray(v0)))
                 sec = time.perf_counter() - t
                 count[1] += sec
-                _append(runs_csv, dict(dF=dF, n_segments=n, mu=mu, t1=t1, dt=dt, v0=float(v0),
+                _append(runs_csv, dict(dF=dF, n_segments=n, mu=mu, friction_at=friction_at, ends=ends, sink=sink, t1=t1,
+                                       dt=dt, v0=float(v0),
                                        buckled=int(done[key]), seconds=round(sec, 2)))
                 if progress:
                     print(f"  ΔF = {dF:g} N, v0 = {1e3 * v0:.3f} mm/s: {'buckled' if done[key] else 'stable'}"
@@ -154,7 +184,7 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     pf, sef, cf = fit_power_law([p["dF"] for p in points], [p["field"] for p in points])
     return dict(points=points, exponent_rod3d=p3, exponent_rod3d_stderr=se3, prefactor_rod3d=c3,
                 exponent_field=pf, exponent_field_stderr=sef, prefactor_field=cf, exponent_theory=-0.5,
-                n_segments=n, mu=mu, t1=t1, dt=dt, rtol=rtol, F0=float(theory.reference_load(rod)))
+                n_segments=n, mu=mu, friction_at=friction_at, ends=ends, sink=sink, t1=t1, dt=dt, rtol=rtol, F0=float(theory.reference_load(rod)))
 
 
 def plot_boundary_3d(res, path=None):

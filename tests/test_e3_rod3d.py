@@ -1,0 +1,81 @@
+"""The 3D rod's boundary search (`jaxrod.experiments.e3_rod3d`): the bracketing bisection
+against labels with a known boundary, and the replay of recorded runs."""
+
+import math
+
+import pytest
+
+from jaxrod.experiments.e3_rod3d import _bisect
+
+
+def _counting(root):
+    calls = []
+
+    def label(v):
+        calls.append(v)
+        return v > root
+
+    return label, calls
+
+
+@pytest.mark.parametrize("root", [1.0, 1.03, 0.97, 0.5, 3.0, 1.0399])
+def test_bisect_brackets_a_known_boundary_to_rtol(root):
+    label, calls = _counting(root)
+    lo, hi = _bisect(label, 1.0, 0.04, 0.01, 40)
+    assert len(set(calls)) == len(calls)  # no amplitude run twice
+    assert lo <= root < hi
+    assert hi / lo - 1 <= 0.01
+    assert not label(lo) and label(hi)
+
+
+def test_bisect_uses_few_runs_near_the_guess():
+    # inside the first bracket: its 2 ends + 4 geometric halvings of its 8.3 % (1.04/0.96) to
+    # 1.005 %
+    label, calls = _counting(1.01)
+    _bisect(label, 1.0, 0.04, 0.01, 40)
+    assert len(calls) == 6
+
+
+def test_bisect_gives_up_after_max_runs():
+    label, calls = _counting(math.inf)  # never buckles
+    assert _bisect(label, 1.0, 0.04, 0.01, 6) is None
+    assert len(calls) == 6
+
+
+@pytest.mark.slow
+def test_boundary_3d_replays_its_runs(tmp_path):
+    from jaxrod.experiments.e3_rod3d import boundary_3d
+
+    path = tmp_path / "runs.csv"
+    first = boundary_3d([20.0], n=8, rtol=0.1, t1=0.1, runs_csv=str(path), progress=False)
+    lines = path.read_text().splitlines()
+    again = boundary_3d([20.0], n=8, rtol=0.1, t1=0.1, runs_csv=str(path), progress=False)
+    assert path.read_text().splitlines() == lines  # nothing run again
+    assert again["points"][0]["seconds_new_runs"] == 0.0
+    assert again["points"][0]["bracket"] == first["points"][0]["bracket"]
+    assert len(lines) - 1 == first["points"][0]["runs"]
+    lo, hi = first["points"][0]["bracket"]
+    assert hi / lo - 1 <= 0.1
+
+
+@pytest.mark.slow
+def test_label_is_the_scene_run_of_the_3d_rod():
+    import jax
+    import jax.numpy as jnp
+
+    from jaxrod.boundary.indicators import crossing_state
+    from jaxrod.experiments.e3_rod3d import label_3d
+    from jaxrod.params import RodChannel
+    from jaxrod.perturbations import SineVelocity
+    from jaxrod.scene import Scene
+
+    rod = RodChannel.reference(0.3)
+    dt = Scene(rod, 20.0, SineVelocity(1e-3), kind="rod3d", n=8).step()
+    label = label_3d(rod, 8, dt, 0.05)
+    scene = jax.jit(lambda v0: crossing_state(Scene(rod, 20.0, SineVelocity(v0), kind="rod3d", n=8, dt=dt), 0.05))
+    seen = set()
+    for v0 in (2e-3, 60e-3):
+        (q, _), b = scene(jnp.asarray(v0))
+        assert bool(label(jnp.asarray(20.0), jnp.asarray(v0))) == bool(b)
+        seen.add(bool(b))
+    assert seen == {False, True}  # both labels occur
