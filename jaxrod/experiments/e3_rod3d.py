@@ -32,7 +32,7 @@ from ..perturbations import SineVelocity
 from ..scene import Scene
 from ..stability_map import fit_power_law
 
-__all__ = ["boundary_3d", "RUN_COLUMNS"]
+__all__ = ["boundary_3d", "label_3d", "plot_boundary_3d", "RUN_COLUMNS"]
 
 DT_RTOL = 1e-3
 RUN_COLUMNS = ["dF", "n_segments", "mu", "friction_at", "ends", "sink", "t1", "dt", "v0", "buckled", "seconds"]
