@@ -125,7 +125,7 @@ if "e1" in r:
         if r3["speeds_m_s"]:
             txt = "; ".join(f"{s_ * 1e3:g} mm/s: " + ", ".join(f"{f:.2f}" for f in fs) + " N"
                             for s_, fs in zip(r3["speeds_m_s"], r3["critical_force_N"]))
-            rows.append((f"E1, μ = 0: critical force (peak reaction) against pushing speed, v₀ = "
+            rows.append(("E1, μ = 0: critical force (peak reaction) against pushing speed, v₀ = "
                          + ", ".join(f"{v * 1e3:g}" for v in r3["v0_m_s"]) + " mm/s",
                          "→ F⁰₆ = 1.31 N as speed → 0", txt, f"rod3d, {sp['n_segments_3d']} segments",
                          "jaxrod reproduce e1"))
