@@ -61,13 +61,10 @@ class Rod3D(AbstractModel):
     - `preload`: for `control="force"`, the uniform compressive force [N] at which the straight
       rod's ends are held (the default `F` of `initial_state` and `perturbed_state`); it sets
       the buckling threshold (see `buckle_threshold`).
-    - `speed`: pushing speed [m/s] for displacement control (negative: the end is pulled back,
-      to unload).
-    - `contact_stiffness`: Hertz constant k [N/m^2.5] per unit length; default: the rod sinks
-      1e-3·R into the wall under its own weight, k = w/(1e-3 R)^{3/2}. The straight rod on the
-      wall is stable against wrinkling into it only while F²/(4EI) < 1.5w/δ₀ (δ₀ the sink, the
-      wall's linearised stiffness per length): about 50 N for the reference rod with the
-      default; stiffen the wall for larger loads (README, "Field model against the 3D rod").
+    - `speed`: pushing speed [m/s] for displacement control (negative: pulled back, to unload).
+    - `contact_stiffness`: Hertz constant k [N/m^2.5] per length; default: the rod sinks δ₀ = 1e-3·R
+      under its weight, k = w/δ₀^{3/2}. The straight rod wrinkles into the wall once F²/(4EI) >
+      1.5w/δ₀ (≈ 50 N for the reference rod): stiffen the wall for larger loads (README).
     - `contact_damping`: Hunt–Crossley ζ [s/m], ≥ 0 (default 0: energy is conserved at μ = 0).
     - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (for
       quasi-static tests; 0 by default).
