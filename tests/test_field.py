@@ -257,6 +257,8 @@ def test_creeping_split_turns_a_stable_rod_into_a_buckled_one():
     assert not np.asarray(bad.stuck).any()  # never truly stuck: it creeps
 
 
+@pytest.mark.slow  # 20 s; the smooth law through diffrax is checked on the single-mode model by default
+# (test_tanh_tends_to_the_sharp_law_on_short_horizons)
 def test_smooth_law_through_diffrax_on_the_field_model():
     model = jr.FieldModel.from_rod(ROD, 16, dF=2.0)
     q0, w0 = sine_start(model, 0.01)

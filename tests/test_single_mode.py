@@ -219,6 +219,7 @@ def test_explicit_sharp_sign_chatters_and_never_sticks():
     assert np.all(np.asarray(pv.v)[late] == 0.0)
 
 
+@pytest.mark.slow  # 20 s of Kvaerno5 over 60 s; test_explicit_sharp_sign_chatters_and_never_sticks runs by default
 def test_tanh_creep_turns_a_stable_loaded_state_into_runaway():
     k, f = -4.0, 2.0  # stick line |A| <= 0.5
     model = jr.SingleMode(k, f, f)

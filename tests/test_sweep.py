@@ -42,6 +42,7 @@ INPUTS = {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05], "realization": [0, 1, 2
 """
 
 
+@pytest.mark.slow  # 30 s (a 4-device subprocess compiling twice); lanes and refills: test_pool_does_not_depend_on_lanes_refills_or_scheduling
 def test_results_do_not_depend_on_chunk_size_or_device_count(tmp_path):
     ref = sweep(SPEC, INPUTS, seed=3, chunk_size=5, progress=False)
     assert ref.outputs["buckled"].any() and not ref.outputs["buckled"].all()
@@ -161,6 +162,7 @@ def test_ensemble_probability_with_confidence_interval():
     assert lo == pytest.approx(0.0, abs=1e-12) and 0.2 < hi < 0.35
 
 
+@pytest.mark.slow  # 35 s of compilation; the pool's member-equals-single-run check runs by default for the reduced models
 def test_rod3d_sweep_matches_single_runs_and_flags_bad_members():
     """The 3D rod in a sweep (continuous batching, the one engine): each valid member is the run
     `jaxrod.simulate` gives for the same dead load, perturbation and step (same steps, same
