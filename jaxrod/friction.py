@@ -69,13 +69,15 @@ class AbstractFriction(eqx.Module):
         """Friction acceleration (opposing `v`) as a function of velocity, for ODE solvers."""
 
     @abc.abstractmethod
-    def impulse_2d(self, u, W, bound_stick, bound_slip):
+    def impulse_2d(self, u, W, bound_stick, bound_slip, guess=None):
         """The vector law at contact points (the 3D rod): per point, the 2D impulse
         `p = (p₁, p₂)` [N·s] for the tangential slip velocities `u = (u₁, u₂)` [m/s] of points
         with the symmetric inverse mass `W = (W₁₁, W₁₂, W₂₂)` [1/kg], under the impulse bounds
         `bound_stick` (to hold) and `bound_slip` (when sliding) [N·s]. Every entry is an array
         of one shape (one element per point: components as separate arrays, which fuse on
-        CPU). Returns `(p, sticks)`: `sticks` marks the points held at rest."""
+        CPU). `guess` (p₁, p₂), if given, is an impulse close to the answer (the last sweep's),
+        which a law may use to start its iterations. Returns `(p, sticks)`: `sticks` marks the
+        points held at rest."""
 
 
 class Coulomb(AbstractFriction):
@@ -92,35 +94,47 @@ class Coulomb(AbstractFriction):
     def acceleration(self, v, f_s, f_d):
         return f_d * jnp.sign(v)
 
-    def impulse_2d(self, u, W, bound_stick, bound_slip):
+    def impulse_2d(self, u, W, bound_stick, bound_slip, guess=None):
         """The exact proximal step of the vector law: stick, p = −W⁻¹u, while |W⁻¹u| ≤
         `bound_stick`; otherwise the impulse of norm `bound_slip` that maximises dissipation,
-        p = −(W + λI)⁻¹u with |p| = `bound_slip` (a 1D secular equation in λ, solved by Newton)."""
+        p = −(W + λI)⁻¹u with |p| = `bound_slip` (a 1D secular equation in λ, solved by Newton:
+        8 iterations from a lower bound of the root, or 3 from the λ that the impulse `guess`
+        satisfies for this u, −(u + W·guess)·guess/|guess|², kept between the root's bounds;
+        the slip impulse is scaled onto the bound exactly)."""
         W11, W12, W22 = W
 
-        def solve(lam, b1, b2):  # (W + λI)⁻¹ b
+        def adj(lam, b1, b2):  # adj(W + λI) b and det(W + λI): (W + λI)⁻¹ b = adj b / det
             a11, a22 = W11 + lam, W22 + lam
-            det = a11 * a22 - W12 * W12
-            return (a22 * b1 - W12 * b2) / det, (a11 * b2 - W12 * b1) / det
+            return (a22 * b1 - W12 * b2, a11 * b2 - W12 * b1), a11 * a22 - W12 * W12
 
         zero = jnp.zeros_like(W11)
-        s1, s2 = solve(zero, *u)
-        p_stick = (-s1, -s2)
+        (y1, y2), det = adj(zero, *u)
+        p_stick = (-y1 / det, -y2 / det)
         sticks = safe_hypot(*p_stick) <= bound_stick
         slips = ~sticks & (bound_slip > 0)
-        # slip: Newton on φ(λ) = 1/|p(λ)| − 1/c (concave, increasing), from a λ₀ left of the root
+        # slip: Newton on φ(λ) = 1/|p(λ)| − 1/c (concave, increasing) within the root's bounds
+        # |u|/c − tr W ≤ λ* ≤ |u|/c. With p = −y/D (y = adj u, D = det): φ = D/|y| − 1/c and
+        # φ' = p·A⁻¹p/|p|³ = y·adj y/|y|³, so a step is one expression with one square root and
+        # one division (on CPU each divided intermediate with several users is a kernel of its own)
         c = jnp.where(slips, bound_slip, 1.0)
         trW = W11 + W22
         us = (jnp.where(slips, u[0], 2.0 * trW), jnp.where(slips, u[1], 0.0))
-        lam = jnp.maximum(0.0, safe_hypot(*us) / c - trW)
-        for _ in range(8):
-            p1, p2 = solve(lam, *us)
-            pn = safe_hypot(p1, p2)
-            q1, q2 = solve(lam, p1, p2)
-            dphi = (p1 * q1 + p2 * q2) / pn**3  # p = −A⁻¹u: the sign cancels in p·A⁻¹p
-            lam = jnp.maximum(lam - (1.0 / pn - 1.0 / c) / dphi, 0.0)
-        q1, q2 = solve(lam, *us)
-        return tuple(jnp.where(sticks, ps, jnp.where(slips, -q, 0.0)) for ps, q in zip(p_stick, (q1, q2))), sticks
+        lo = jnp.maximum(0.0, safe_hypot(*us) / c - trW)
+        hi = safe_hypot(*us) / c
+        lam, iterations = lo, 8
+        if guess is not None:
+            g1, g2 = guess
+            gg = g1 * g1 + g2 * g2
+            est = -((us[0] + W11 * g1 + W12 * g2) * g1 + (us[1] + W12 * g1 + W22 * g2) * g2) / jnp.where(gg > 0, gg, 1.0)
+            lam, iterations = jnp.where(gg > 0, jnp.clip(est, lo, hi), lo), 3
+        for _ in range(iterations):
+            (y1, y2), det = adj(lam, *us)
+            (z1, z2), _ = adj(lam, y1, y2)
+            yy = y1 * y1 + y2 * y2
+            lam = jnp.clip(lam - (det * yy - yy * jnp.sqrt(yy) / c) / (y1 * z1 + y2 * z2), lo, hi)
+        (y1, y2), _ = adj(lam, *us)
+        k = c / safe_hypot(y1, y2)  # onto |p| = c
+        return tuple(jnp.where(sticks, ps, jnp.where(slips, -k * y, 0.0)) for ps, y in zip(p_stick, (y1, y2))), sticks
 
 
 class Tanh(AbstractFriction):
@@ -144,7 +158,7 @@ class Tanh(AbstractFriction):
     def acceleration(self, v, f_s, f_d):
         return f_d * jnp.tanh(v / self.eps)
 
-    def impulse_2d(self, u, W, bound_stick, bound_slip):
+    def impulse_2d(self, u, W, bound_stick, bound_slip, guess=None):
         """The explicit smoothed impulse −`bound_slip`·tanh(|u|/ε)·u/|u| (never sticks)."""
         x = safe_hypot(*u) / self.eps
         small = x < 1e-4

@@ -108,14 +108,23 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     def merge(even, odd, size):
         return jnp.stack([even, odd], 1).reshape((2 * M,) + even.shape[1:])[:size]
 
-    node = [dict() for _ in range(2)]
-    for name, value, fill in (("cl", cl, 0.0), ("cr", cr, 0.0), ("W11", W11, 1.0), ("W12", W12, 0.0),
-                              ("W22", W22, 1.0), ("bound_s", bound_s, 0.0), ("bound_d", bound_d, 0.0),
-                              ("active", in_contact, False)):
-        node[0][name], node[1][name] = split(value, fill)
+    # every per-node field in one array per colour, read inside the sweep: a while loop's inputs
+    # are buffers, so one array per field and colour would be one kernel each per pass
+    fields = dict(cl=cl, cr=cr, W11=W11, W12=W12, W22=W22, bound_s=bound_s, bound_d=bound_d,
+                  active=in_contact.astype(dtype))
     for name, value in (("t2", t2), ("fm", fm), ("g1l", g1l), ("g2l", g2l), ("g1r", g1r), ("g2r", g2r)):
-        node[0][name], node[1][name] = split3(value)
-    Jseg = split3(c3.unpack(Jf))
+        fields.update({f"{name}{k}": value[k] for k in range(3)})
+    fields.update({f"J{k}": jnp.concatenate([Jf[:, k], jnp.zeros((1,), dtype)]) for k in range(3)})
+    names = list(fields)
+    colours = split(jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in names]).T)
+
+    def fields_of(c):
+        K = {k: colours[c][:, i] for i, k in enumerate(names)}
+        K["W11"], K["W22"] = jnp.where(K["W11"] == 0, 1.0, K["W11"]), jnp.where(K["W22"] == 0, 1.0, K["W22"])
+        K["active"] = K["active"] > 0
+        for name in ("t2", "fm", "g1l", "g2l", "g1r", "g2r", "J"):
+            K[name] = tuple(K.pop(f"{name}{k}") for k in range(3))
+        return K
 
     def neighbours(c, w):
         """The spins of the left and right segments of the colour-`c` nodes."""
@@ -125,14 +134,14 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
 
     def slip(c, v, w):
         """Tangential velocities (u₁, u₂) of the colour-`c` contact points."""
-        K = node[c]
+        K = fields_of(c)
         wl, wr = neighbours(c, w)
         return (v[0] + K["cl"] * c3.dot(wl, K["g1l"]) + K["cr"] * c3.dot(wr, K["g1r"]),
                 c3.dot(K["t2"], v) + K["cl"] * c3.dot(wl, K["g2l"]) + K["cr"] * c3.dot(wr, K["g2r"]))
 
     def apply(c, v, w, dp):
         """Velocities of the colour-`c` nodes and of all segments after their impulses `dp`."""
-        K = node[c]
+        K, Jseg = fields_of(c), (fields_of(0)["J"], fields_of(1)["J"])
         p1, p2 = dp
         v = (v[0] + K["fm"][0] * p1, v[1] + K["fm"][1] * p2 * K["t2"][1], v[2] + K["fm"][2] * p2 * K["t2"][2])
         tl = tuple(K["cl"] * (p1 * K["g1l"][k] + p2 * K["g2l"][k]) for k in range(3))  # left segment
@@ -162,12 +171,12 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         vs, stucks, p_acc = list(vs), list(stucks), list(p_acc)
         change = jnp.zeros((), dtype)
         for c in (0, 1):
-            K = node[c]
+            K = fields_of(c)
             s1, s2 = slip(c, vs[c], w)
             pa = p_acc[c]
             u = (s1 - (K["W11"] * pa[0] + K["W12"] * pa[1]), s2 - (K["W12"] * pa[0] + K["W22"] * pa[1]))  # without own
             p, sticks = friction.impulse_2d(u, (K["W11"], K["W12"], K["W22"]),
-                                            jnp.where(stucks[c], K["bound_s"], K["bound_d"]), K["bound_d"])
+                                            jnp.where(stucks[c], K["bound_s"], K["bound_d"]), K["bound_d"], pa)
             p = (jnp.where(K["active"], p[0], 0.0), jnp.where(K["active"], p[1], 0.0))
             dp = (p[0] - pa[0], p[1] - pa[1])
             change = jnp.maximum(change, jnp.max(safe_hypot(*dp)))
@@ -179,18 +188,13 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         k = carry[-1]
         return (k == 0) | ((k < model.friction_sweeps) & (carry[-2] > model.friction_tol))
 
-    def body(carry):
-        # a member that has converged keeps its impulses while others of a vmapped batch sweep
-        # on, so a batch member equals its single run
-        new = sweep(carry)
-        done = ~more(carry)
-        return jax.tree_util.tree_map(lambda a, b: jnp.where(done, a, b), carry, new)
-
     carry = (tuple(vs), w, split(stuck, False), p0, jnp.zeros((), dtype), 0)
     if model.friction_sweeps == 1:  # no loop: reverse-mode differentiable
         carry = sweep(carry)
     else:  # one compiled copy of the sweep, in the loop (compile time)
-        carry = jax.lax.while_loop(more, body, carry)
+        # (under vmap, the loop's batching keeps a converged member's carry while the others
+        # sweep on, so a batch member equals its single run)
+        carry = jax.lax.while_loop(more, sweep, carry)
     vs, w, stucks, p_acc, residual, _ = carry
     n1 = model.n + 1
     v = jnp.stack([merge(vs[0][k], vs[1][k], n1) for k in range(3)], -1)
