@@ -15,8 +15,11 @@ compilation:
 Both revisions are checked to reach the same amplitude (printed). Rows go to
 `benchmarks/results/rod3d_step.csv`.
 
-    python benchmarks/rod3d_step.py --ref a5f4fbf~1          # n = 60, 120, 240, 500 (~6 min)
+    python benchmarks/rod3d_step.py --ref a5f4fbf~1 07402aa  # n = 60, 120, 240, 500 (~12 min)
     python benchmarks/rod3d_step.py --ref a5f4fbf~1 --quick  # n = 30, 60
+
+Each single-rod row also counts the kernels (fusions and unfused ops of the optimised HLO) that
+one step's loop body and one friction sweep execute.
 """
 
 from __future__ import annotations
@@ -31,6 +34,43 @@ import tempfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
+
+
+def loop_kernels(compiled_text: str) -> dict:
+    """Kernels one pass of each loop runs, from the optimised HLO: for the step loop (the loop
+    whose body holds the two friction loops) and one friction sweep, the count of its body's
+    instructions that execute (fusions and unfused ops; not parameters, constants, tuples,
+    bitcasts). Zero where the compiled step has no friction loop (one sweep)."""
+    import re
+
+    comps, cur = {}, None
+    for line in compiled_text.splitlines():
+        m = re.match(r"^(?:ENTRY )?%?([\w.\-]+) .*\{$", line)
+        if m and not line.startswith(" "):
+            cur = comps[m.group(1)] = []
+        elif cur is not None and line.startswith("  ") and " = " in line:
+            cur.append(line.split(" = ", 1)[1])
+    skip = {"parameter", "constant", "get-tuple-element", "tuple", "bitcast"}
+
+    def ops(body):
+        return [re.search(r"\s([a-z\-]+)\(", " " + ins.split(" ", 1)[1]).group(1) for ins in comps[body]]
+
+    loops = {}
+    for body in comps:
+        for ins in comps[body]:
+            m = re.search(r"while\(.*body=%?([\w.\-]+)", ins)
+            if m:
+                loops[m.group(1)] = body
+    inner = {b: [c for c, parent in loops.items() if parent == b] for b in loops}
+    out = dict(step_kernels=0, sweep_kernels=0)
+    for b in loops:
+        if len(inner[b]) == 2 and all(not inner[c] for c in inner[b]):
+            out["step_kernels"] = sum(o not in skip for o in ops(b))
+            out["sweep_kernels"] = sum(o not in skip for o in ops(inner[b][0]))
+    if not out["step_kernels"]:  # one sweep: the step is the innermost loop with a friction pass inline
+        leaf = [b for b in loops if not inner[b]]
+        out["step_kernels"] = max(sum(o not in skip for o in ops(b)) for b in leaf)
+    return out
 
 
 def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
@@ -66,7 +106,8 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
         for kind, B, f, arg in cases:
             (amp, k), compile_s, best = timed(f, arg, repeats=repeats, budget=float("inf"))
             k = int(jnp.max(k))
-            rows.append(dict(n=n, setting=label, kind=kind, batch=B, steps=k, dt=dt, seconds=best,
+            counts = loop_kernels(f.lower(arg).compile().as_text()) if kind == "single" else {}
+            rows.append(dict(**counts, n=n, setting=label, kind=kind, batch=B, steps=k, dt=dt, seconds=best,
                              us_per_rod_step=best / k / B * 1e6, compile_s=compile_s,
                              amplitude=float(jnp.ravel(amp)[0])))
     return rows
@@ -84,19 +125,18 @@ def _run(tree: str, n: int, steps: int, batch: int, repeats: int) -> list[dict]:
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--ref", default=None, help="git revision to compare with (default: none)")
+    ap.add_argument("--ref", nargs="*", default=[], help="git revisions to compare with (default: none)")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default=os.path.join(HERE, "results", "rod3d_step.csv"))
     args = ap.parse_args()
     sizes = [(30, 1000), (60, 1000)] if args.quick else [(60, 2000), (120, 1500), (240, 1000), (500, 400)]
     batch, repeats = (8, 1) if args.quick else (64, 2)
     trees = [("working tree", ROOT)]
-    tmp = None
-    if args.ref:
+    for ref in args.ref:
         tmp = tempfile.mkdtemp(prefix="jaxrod_ref_")
-        subprocess.run(["git", "-C", ROOT, "worktree", "add", "--detach", tmp, args.ref], check=True,
+        subprocess.run(["git", "-C", ROOT, "worktree", "add", "--detach", tmp, ref], check=True,
                        capture_output=True)
-        trees.append((args.ref, tmp))
+        trees.append((ref, tmp))
     rows = []
     try:
         for n, steps in sizes:
@@ -104,21 +144,22 @@ def main():
                 for r in _run(tree, n, steps, batch, repeats):
                     r["revision"] = name
                     rows.append(r)
+                    kern = f"   kernels: step {r['step_kernels']}, sweep {r['sweep_kernels']}" if "step_kernels" in r else ""
                     print(f"n = {n:4d}  {name:14s} {r['setting']:9s} {r['kind']:6s} x{r['batch']:<3d} "
-                          f"{r['us_per_rod_step']:9.1f} us per rod-step   amplitude {r['amplitude']:.9e}", flush=True)
+                          f"{r['us_per_rod_step']:9.1f} us per rod-step   amplitude {r['amplitude']:.9e}{kern}", flush=True)
     finally:
-        if tmp:
-            subprocess.run(["git", "-C", ROOT, "worktree", "remove", "--force", tmp], capture_output=True)
+        for _, tree in trees[1:]:
+            subprocess.run(["git", "-C", ROOT, "worktree", "remove", "--force", tree], capture_output=True)
     from _common import write_csv
 
     write_csv(args.out, rows)
-    if args.ref:
+    for ref in args.ref:
         for n, _ in sizes:
             for setting, kind in (("converged", "single"), ("1 sweep", "single"), ("converged", "batch")):
                 sel = {r["revision"]: r["us_per_rod_step"] for r in rows
                        if r["n"] == n and r["setting"] == setting and r["kind"] == kind}
-                if len(sel) == 2:
-                    print(f"n = {n:4d}  {setting:9s} {kind:6s}: {sel[args.ref] / sel['working tree']:.2f}x faster than {args.ref}")
+                if ref in sel:
+                    print(f"n = {n:4d}  {setting:9s} {kind:6s}: {sel[ref] / sel['working tree']:.2f}x faster than {ref}")
     print("wrote", args.out)
 
 
