@@ -127,9 +127,12 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", nargs="*", default=[], help="git revisions to compare with (default: none)")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--n", type=int, nargs="*", default=[], help="segment counts (default 60 120 240 500)")
     ap.add_argument("--out", default=os.path.join(HERE, "results", "rod3d_step.csv"))
     args = ap.parse_args()
     sizes = [(30, 1000), (60, 1000)] if args.quick else [(60, 2000), (120, 1500), (240, 1000), (500, 400)]
+    if args.n:
+        sizes = [(n, max(400, 120000 // n)) for n in args.n]
     batch, repeats = (8, 1) if args.quick else (64, 2)
     trees = [("working tree", ROOT)]
     for ref in args.ref:

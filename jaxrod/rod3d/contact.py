@@ -116,10 +116,12 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         fields.update({f"{name}{k}": value[k] for k in range(3)})
     fields.update({f"J{k}": jnp.concatenate([Jf[:, k], jnp.zeros((1,), dtype)]) for k in range(3)})
     names = list(fields)
-    colours = split(jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in names]).T)
+    table = jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in names])  # (fields, n + 1)
+    table = jnp.pad(table, ((0, 0), (0, 2 * M - table.shape[1]))).reshape(len(names), M, 2)
+    colours = table[:, :, 0], table[:, :, 1]  # each (fields, M): a field is a contiguous row
 
     def fields_of(c):
-        K = {k: colours[c][:, i] for i, k in enumerate(names)}
+        K = {k: colours[c][i] for i, k in enumerate(names)}
         K["W11"], K["W22"] = jnp.where(K["W11"] == 0, 1.0, K["W11"]), jnp.where(K["W22"] == 0, 1.0, K["W22"])
         K["active"] = K["active"] > 0
         for name in ("t2", "fm", "g1l", "g2l", "g1r", "g2r", "J"):
