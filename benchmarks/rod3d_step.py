@@ -133,7 +133,7 @@ def main():
     sizes = [(30, 1000), (60, 1000)] if args.quick else [(60, 2000), (120, 1500), (240, 1000), (500, 400)]
     if args.n:
         sizes = [(n, max(400, 120000 // n)) for n in args.n]
-    batch, repeats = (8, 1) if args.quick else (64, 2)
+    batch, repeats = (8, 1) if args.quick else (64, 3)
     trees = [("working tree", ROOT)]
     for ref in args.ref:
         tmp = tempfile.mkdtemp(prefix="jaxrod_ref_")
