@@ -16,6 +16,7 @@ Both revisions are checked to reach the same amplitude (printed). Rows go to
 `benchmarks/results/rod3d_step.csv`.
 
     python benchmarks/rod3d_step.py --ref a5f4fbf~1 07402aa  # n = 60, 120, 240, 500 (~12 min)
+    python benchmarks/rod3d_step.py --ref 07402aa --n 60 120 500 --pairs 4  # paired rounds (~15 min)
     python benchmarks/rod3d_step.py --ref a5f4fbf~1 --quick  # n = 30, 60
 
 Each single-rod row also counts the kernels (fusions and unfused ops of the optimised HLO) that
@@ -27,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -128,6 +130,9 @@ def main():
     ap.add_argument("--ref", nargs="*", default=[], help="git revisions to compare with (default: none)")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--n", type=int, nargs="*", default=[], help="segment counts (default 60 120 240 500)")
+    ap.add_argument("--pairs", type=int, default=1,
+                    help="rounds: each round runs every size in every tree in turn (A B A B ...); "
+                         "speed-ups are the median over rounds of the ratio within a round")
     ap.add_argument("--out", default=os.path.join(HERE, "results", "rod3d_step.csv"))
     args = ap.parse_args()
     sizes = [(30, 1000), (60, 1000)] if args.quick else [(60, 2000), (120, 1500), (240, 1000), (500, 400)]
@@ -142,14 +147,13 @@ def main():
         trees.append((ref, tmp))
     rows = []
     try:
-        for n, steps in sizes:
-            for name, tree in trees:
-                for r in _run(tree, n, steps, batch, repeats):
-                    r["revision"] = name
-                    rows.append(r)
-                    kern = f"   kernels: step {r['step_kernels']}, sweep {r['sweep_kernels']}" if "step_kernels" in r else ""
-                    print(f"n = {n:4d}  {name:14s} {r['setting']:9s} {r['kind']:6s} x{r['batch']:<3d} "
-                          f"{r['us_per_rod_step']:9.1f} us per rod-step   amplitude {r['amplitude']:.9e}{kern}", flush=True)
+        for round_, (n, steps), (name, tree) in ((k, size, t) for k in range(args.pairs) for size in sizes for t in trees):
+            for r in _run(tree, n, steps, batch, repeats):
+                r["revision"], r["round"] = name, round_
+                rows.append(r)
+                kern = f"   kernels: step {r['step_kernels']}, sweep {r['sweep_kernels']}" if "step_kernels" in r else ""
+                print(f"n = {n:4d}  {name:14s} {r['setting']:9s} {r['kind']:6s} x{r['batch']:<3d} "
+                      f"{r['us_per_rod_step']:9.1f} us per rod-step   amplitude {r['amplitude']:.9e}{kern}", flush=True)
     finally:
         for _, tree in trees[1:]:
             subprocess.run(["git", "-C", ROOT, "worktree", "remove", "--force", tree], capture_output=True)
@@ -159,10 +163,12 @@ def main():
     for ref in args.ref:
         for n, _ in sizes:
             for setting, kind in (("converged", "single"), ("1 sweep", "single"), ("converged", "batch")):
-                sel = {r["revision"]: r["us_per_rod_step"] for r in rows
+                sel = {(r["revision"], r["round"]): r["us_per_rod_step"] for r in rows
                        if r["n"] == n and r["setting"] == setting and r["kind"] == kind}
-                if ref in sel:
-                    print(f"n = {n:4d}  {setting:9s} {kind:6s}: {sel[ref] / sel['working tree']:.2f}x faster than {ref}")
+                ratios = [sel[ref, k] / sel["working tree", k] for k in range(args.pairs) if (ref, k) in sel]
+                if ratios:
+                    print(f"n = {n:4d}  {setting:9s} {kind:6s}: {statistics.median(ratios):.2f}x faster than {ref} "
+                          f"(rounds: {', '.join(f'{x:.2f}' for x in ratios)})")
     print("wrote", args.out)
 
 
