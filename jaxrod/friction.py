@@ -119,8 +119,8 @@ class Coulomb(AbstractFriction):
         c = jnp.where(slips, bound_slip, 1.0)
         trW = W11 + W22
         us = (jnp.where(slips, u[0], 2.0 * trW), jnp.where(slips, u[1], 0.0))
-        lo = jnp.maximum(0.0, safe_hypot(*us) / c - trW)
         hi = safe_hypot(*us) / c
+        lo = jnp.maximum(0.0, hi - trW)
         lam, iterations = lo, 8
         if guess is not None:
             g1, g2 = guess

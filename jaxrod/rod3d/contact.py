@@ -121,6 +121,7 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     colours = table[:, :, 0], table[:, :, 1]  # each (fields, M): a field is a contiguous row
 
     def fields_of(c):
+        """The colour-`c` fields by name (read where they are used: inside the sweep loop)."""
         K = {k: colours[c][i] for i, k in enumerate(names)}
         K["W11"], K["W22"] = jnp.where(K["W11"] == 0, 1.0, K["W11"]), jnp.where(K["W22"] == 0, 1.0, K["W22"])
         K["active"] = K["active"] > 0
@@ -134,16 +135,16 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
             return w[0], w[1]
         return tuple(jnp.concatenate([jnp.zeros((1,), dtype), a[:-1]]) for a in w[1]), w[0]
 
-    def slip(c, v, w):
+    def slip(node, c, v, w):
         """Tangential velocities (u₁, u₂) of the colour-`c` contact points."""
-        K = fields_of(c)
+        K = node[c]
         wl, wr = neighbours(c, w)
         return (v[0] + K["cl"] * c3.dot(wl, K["g1l"]) + K["cr"] * c3.dot(wr, K["g1r"]),
                 c3.dot(K["t2"], v) + K["cl"] * c3.dot(wl, K["g2l"]) + K["cr"] * c3.dot(wr, K["g2r"]))
 
-    def apply(c, v, w, dp):
+    def apply(node, c, v, w, dp):
         """Velocities of the colour-`c` nodes and of all segments after their impulses `dp`."""
-        K, Jseg = fields_of(c), (fields_of(0)["J"], fields_of(1)["J"])
+        K, Jseg = node[c], (node[0]["J"], node[1]["J"])
         p1, p2 = dp
         v = (v[0] + K["fm"][0] * p1, v[1] + K["fm"][1] * p2 * K["t2"][1], v[2] + K["fm"][2] * p2 * K["t2"][2])
         tl = tuple(K["cl"] * (p1 * K["g1l"][k] + p2 * K["g2l"][k]) for k in range(3))  # left segment
@@ -165,16 +166,18 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     p0 = split3((p0[:, 0], p0[:, 1]))
     vs = list(split3(c3.unpack(v)))
     w = split3(c3.unpack(w))
+    node = (fields_of(0), fields_of(1))
     for c in (0, 1):
-        vs[c], w = apply(c, vs[c], w, p0[c])
+        vs[c], w = apply(node, c, vs[c], w, p0[c])
 
     def sweep(carry):
         vs, w, stucks, p_acc, _, k = carry
         vs, stucks, p_acc = list(vs), list(stucks), list(p_acc)
         change = jnp.zeros((), dtype)
+        node = (fields_of(0), fields_of(1))
         for c in (0, 1):
-            K = fields_of(c)
-            s1, s2 = slip(c, vs[c], w)
+            K = node[c]
+            s1, s2 = slip(node, c, vs[c], w)
             pa = p_acc[c]
             u = (s1 - (K["W11"] * pa[0] + K["W12"] * pa[1]), s2 - (K["W12"] * pa[0] + K["W22"] * pa[1]))  # without own
             p, sticks = friction.impulse_2d(u, (K["W11"], K["W12"], K["W22"]),
@@ -182,7 +185,7 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
             p = (jnp.where(K["active"], p[0], 0.0), jnp.where(K["active"], p[1], 0.0))
             dp = (p[0] - pa[0], p[1] - pa[1])
             change = jnp.maximum(change, jnp.max(safe_hypot(*dp)))
-            vs[c], w = apply(c, vs[c], w, dp)
+            vs[c], w = apply(node, c, vs[c], w, dp)
             p_acc[c], stucks[c] = p, K["active"] & sticks
         return tuple(vs), w, tuple(stucks), tuple(p_acc), change / scale, k + 1
 
