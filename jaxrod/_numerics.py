@@ -5,7 +5,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-__all__ = ["safe_norm", "float_leaf"]
+__all__ = ["safe_norm", "safe_hypot", "float_leaf", "computed_once"]
 
 
 def safe_norm(v: Float[Array, "... 3"], axis: int = -1) -> Float[Array, "..."]:
@@ -25,3 +25,20 @@ def safe_hypot(a: Float[Array, "..."], b: Float[Array, "..."]) -> Float[Array, "
 def float_leaf(x, dtype=None):
     """`x` as an array of `dtype` (default: the default float dtype): a model's physical number."""
     return jnp.asarray(x, dtype=jnp.result_type(float) if dtype is None else dtype)
+
+
+def computed_once(values, ref: Float[Array, "..."]):
+    """`values` (an array or a tuple of arrays of `ref`'s shape) unchanged, but computed once.
+
+    XLA on CPU fuses a chain of cheap elementwise operations into every kernel that reads its
+    result: a value read by k kernels is recomputed k times (in the 3D rod's friction pass a
+    slip impulse was recomputed in every kernel that updates a velocity, 3–4× the unique
+    arithmetic). It never duplicates a division, so dividing by a 1 it cannot prove to be 1
+    (NaN where `ref` is NaN, 1 elsewhere; `ref` any array of the state, not a constant) makes
+    the value one kernel's output that the others read. x/1 is exact: the values and their
+    derivatives are unchanged (but for the compiler's choice of fused multiply-adds around the
+    new kernel boundary, a rounding)."""
+    one = jnp.where(jnp.isnan(ref), jnp.nan, 1.0).astype(ref.dtype)
+    if isinstance(values, tuple):
+        return tuple(v / one for v in values)
+    return values / one

@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._numerics import safe_hypot, safe_norm
+from .._numerics import computed_once, safe_hypot, safe_norm
 from . import components as c3
 from .energy import _penetration, _shift
 
@@ -80,6 +80,8 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         W11 = W11 + c**2 * c3.dot(Js, (g1[0] * g1[0], g1[1] * g1[1], g1[2] * g1[2]))
         W22 = W22 + c**2 * c3.dot(Js, (g2[0] * g2[0], g2[1] * g2[1], g2[2] * g2[2]))
         W12 = W12 + c**2 * c3.dot(Js, (g1[0] * g2[0], g1[1] * g2[1], g1[2] * g2[2]))
+    # each of these is read by several kernels below (the fields table, movable)
+    W11, W22, W12 = computed_once((W11, W22, W12), N)
     # a point that nothing can move (a clamped end) takes no impulse
     movable = (W11 * W22 - W12 * W12) > 0
     W11, W22, W12 = jnp.where(movable, W11, 1.0), jnp.where(movable, W22, 1.0), jnp.where(movable, W12, 0.0)
@@ -182,6 +184,7 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
             u = (s1 - (K["W11"] * pa[0] + K["W12"] * pa[1]), s2 - (K["W12"] * pa[0] + K["W22"] * pa[1]))  # without own
             p, sticks = friction.impulse_2d(u, (K["W11"], K["W12"], K["W22"]),
                                             jnp.where(stucks[c], K["bound_s"], K["bound_d"]), K["bound_d"], pa)
+            p = computed_once(p, K["W11"])  # read by every velocity it changes
             p = (jnp.where(K["active"], p[0], 0.0), jnp.where(K["active"], p[1], 0.0))
             dp = (p[0] - pa[0], p[1] - pa[1])
             change = jnp.maximum(change, jnp.max(safe_hypot(*dp)))

@@ -10,6 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .._numerics import computed_once
 from . import components as c3
 
 __all__ = ['strains', 'elastic_terms', 'penetration', 'contact_energy', 'external_energy', 'potential', 'kinetic_terms', 'generalized_forces', 'contact_normal', 'forces', 'impulse_work']
@@ -129,6 +130,7 @@ def _conservative(model, X, Qr):
     R = c3.relative_rotation(upper, lower)
     psi = c3.log_rotation(R)
     g = c3.left_jacobian_inv_t(psi, (rod.EI * psi[0] / l0, rod.EI * psi[1] / l0, rod.GJ * psi[2] / l0))
+    g = computed_once(g, psi[0])  # read by the torques of both segments of a joint
     Rg = c3.rmatvec(R, g)
     tau = tuple(tau[k] + _shift(g[k], "left") - _shift(Rg[k], "right") for k in range(3))
     if model.channel:
