@@ -164,7 +164,7 @@ class _NoFrictionPass(Rod3D):
     measures what that pass costs when it has nothing to do."""
 
     def friction_step(self, friction, x, v, Q, w, N, stuck, force, h):
-        return v, w, stuck, force, jnp.zeros((), x.dtype)
+        return v, w, stuck, force, jnp.zeros((), x.dtype), jnp.zeros((), x.dtype)
 
 
 def best_of(fn, repeats: int):

@@ -46,12 +46,12 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     Σ_k gₐₖ g_bₖ / J_k, and the spin change J⁻¹ c Σₐ pₐ gₐ (written out instead of batches of
     3×3 products, which do not fuse on CPU).
 
-    **Returns:** the new `(v, w, stuck, force, residual)`: `force` the tangential friction force
-    of each contact [N], `residual` the largest change of an impulse in the last sweep over the
-    largest bound."""
+    **Returns:** the new `(v, w, stuck, force, residual, sweeps)`: `force` the tangential friction
+    force of each contact [N], `residual` the largest change of an impulse in the last sweep over
+    the largest bound, `sweeps` the sweeps taken."""
     dtype = x.dtype
     if not model.channel:  # no wall, no contact, no friction
-        return v, w, stuck, jnp.zeros_like(force), jnp.zeros((), dtype)
+        return v, w, stuck, jnp.zeros_like(force), jnp.zeros((), dtype), jnp.zeros((), dtype)
     # a held node still touches the wall: its translation is prescribed (the support takes the
     # friction force) but the friction at its contact point still acts on its segments' spin, so
     # the end of the rod cannot roll freely (without it the interior rolls sideways as one body,
@@ -203,9 +203,10 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
         # (under vmap, the loop's batching keeps a converged member's carry while the others
         # sweep on, so a batch member equals its single run)
         carry = jax.lax.while_loop(more, sweep, carry)
-    vs, w, stucks, p_acc, residual, _ = carry
+    vs, w, stucks, p_acc, residual, sweeps = carry
     n1 = model.n + 1
     v = jnp.stack([merge(vs[0][k], vs[1][k], n1) for k in range(3)], -1)
     w = jnp.stack([merge(w[0][k], w[1][k], model.n) for k in range(3)], -1)
     force = jnp.stack([merge(p_acc[0][a], p_acc[1][a], n1) for a in range(2)], -1) / jnp.where(h > 0, h, 1.0)
-    return v, w, merge(*stucks, n1), force, jnp.where(jnp.any(in_contact), residual, 0.0)
+    return (v, w, merge(*stucks, n1), force, jnp.where(jnp.any(in_contact), residual, 0.0),
+            jnp.asarray(sweeps, dtype))

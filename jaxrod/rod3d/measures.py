@@ -51,7 +51,7 @@ def observables(model, q, v, a) -> dict:
     every segment [N]; `height` largest height of the centre line above the channel bottom [m];
     `gap` largest distance of a node inside the clearance circle, R − r [m] (> 0 where the rod
     has lifted off the wall); `friction_residual` the relative residual of the last friction
-    pass (see `Rod3D.friction_tol`)."""
+    pass (see `Rod3D.friction_tol`) and `friction_sweeps` the sweeps it took."""
     x = q.x
     return dict(
         theta=model.theta(x),
@@ -62,4 +62,5 @@ def observables(model, q, v, a) -> dict:
         height=jnp.max(x[:, 2]) + model.rod.R + model.static_sag(),
         gap=jnp.max(-model.penetration(x)[0]) if model.channel else jnp.zeros((), x.dtype),
         friction_residual=v.residual,
+        friction_sweeps=v.sweeps,
     )

@@ -264,7 +264,7 @@ class Rod3D(AbstractModel):
         w = c3.pack(tuple(W[k] + h * (tau[k] - gyro[k]) / J[k] for k in range(3)))
         vn = v.v + h * a.f / self.mass[:, None]
         vn, w = self.constrain(vn, w)
-        return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual)
+        return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
@@ -279,12 +279,12 @@ class Rod3D(AbstractModel):
         """The wall friction impulses of a (half) step `h` at the contact points of `q` under
         the normal forces `a.N` (red–black, see the module docstring); a step of zero length
         changes nothing (not even the stuck flags)."""
-        v, w, stuck, force, res = self.friction_step(friction, q.x, v_trial.v, q.Q, v_trial.w, a.N, v_prev.stuck,
-                                                     v_trial.force, h)
+        v, w, stuck, force, res, sweeps = self.friction_step(friction, q.x, v_trial.v, q.Q, v_trial.w, a.N,
+                                                             v_prev.stuck, v_trial.force, h)
         v, w = self.constrain(v, w)
         moved = h > 0
         return Rod3DVelocity(v, w, jnp.where(moved, stuck, v_prev.stuck), jnp.where(moved, force, v_trial.force),
-                             jnp.where(moved, res, v_trial.residual))
+                             jnp.where(moved, res, v_trial.residual), jnp.where(moved, sweeps, v_trial.sweeps))
 
     def impulse_work(self, v_prev: Rod3DVelocity, v_trial: Rod3DVelocity, v_after: Rod3DVelocity,
                      a: Rod3DForces, h):
@@ -333,7 +333,7 @@ class Rod3D(AbstractModel):
 
     def friction_step(self, friction, x, v, Q, w, N, stuck, force, h):
         """The friction impulses of a (half) step `h` [s] under the law `friction`: the new
-        (v, w, stuck, force, residual) (`jaxrod.rod3d.contact.friction_pass`)."""
+        (v, w, stuck, force, residual, sweeps) (`jaxrod.rod3d.contact.friction_pass`)."""
         return friction_pass(self, friction, x, v, Q, w, N, stuck, force, h)
 
     # -- constraints and the step limit -------------------------------------------------------

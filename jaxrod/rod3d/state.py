@@ -28,13 +28,15 @@ class Rod3DVelocity(eqx.Module):
     then keeps the static coefficient); `force` (n+1, 2), the tangential wall friction force of
     the last impulse [N] (axial, lateral), which starts the next pass (warm start); `residual`,
     the largest change of a contact impulse in the last sweep of that pass relative to the
-    largest friction bound (0 when no contact is active)."""
+    largest friction bound (0 when no contact is active); `sweeps`, the Gauss–Seidel sweeps that
+    pass took (its cost; 0 before the first pass; a float, like every leaf of a state)."""
 
     v: Float[Array, "n1 3"]
     w: Float[Array, "n 3"]
     stuck: Bool[Array, " n1"]
     force: Float[Array, "n1 2"]
     residual: Float[Array, ""]
+    sweeps: Float[Array, ""]
 
 
 class Rod3DForces(eqx.Module):
@@ -52,7 +54,7 @@ def at_rest(q: Rod3DPosition) -> Rod3DVelocity:
     """Velocities of a rod at rest at `q`: no motion, no contact held, no friction memory."""
     x = q.x
     return Rod3DVelocity(jnp.zeros_like(x), jnp.zeros(q.Q.shape[:-1], x.dtype), jnp.zeros(x.shape[:1], bool),
-                         jnp.zeros(x.shape[:1] + (2,), x.dtype), jnp.zeros((), x.dtype))
+                         jnp.zeros(x.shape[:1] + (2,), x.dtype), jnp.zeros((), x.dtype), jnp.zeros((), x.dtype))
 
 
 def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_offset=None):
@@ -91,7 +93,8 @@ def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_off
     Q = jnp.stack([d1, d2, d3], -2)
     v, w = model.constrain(v, jnp.zeros((n, 3), dtype))
     at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
-    return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest, jnp.zeros((n + 1, 2), dtype), jnp.zeros((), dtype))
+    return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest, jnp.zeros((n + 1, 2), dtype), jnp.zeros((), dtype),
+                                              jnp.zeros((), x.dtype))
 
 
 def wall_angle(x: Float[Array, "... n1 3"]) -> Float[Array, "... n1"]:
