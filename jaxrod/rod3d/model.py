@@ -74,8 +74,11 @@ class Rod3D(AbstractModel):
       neighbouring nodes then left unconverged, which lets held contacts creep).
     - `friction_tol`: the pass stops once no contact impulse changes by more than this
       fraction of the largest friction bound μ_s N h in a sweep (default 1e-4); each pass
-      starts from the last one's impulses, so a held rod converges in one sweep. The residual
-      of the last pass is `v.residual` (recorded as the observable `friction_residual`).
+      starts from the last one's impulses (a rod at rest on held contacts converges in one
+      sweep; a rolling–torsion oscillation against the wall changes the impulses from pass to
+      pass: 5–7 sweeps for the held rod of the tests, 2–9 in a sliding run). The residual and
+      the sweeps of the last pass are `v.residual` and `v.sweeps` (the observables
+      `friction_residual`, `friction_sweeps`).
     - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
       models assume) (static).
