@@ -20,7 +20,9 @@ Both revisions are checked to reach the same amplitude (printed). Rows go to
     python benchmarks/rod3d_step.py --ref a5f4fbf~1 --quick  # n = 30, 60
 
 Each single-rod row also counts the kernels (fusions and unfused ops of the optimised HLO) that
-one step's loop body and one friction sweep execute.
+one step's loop body and one friction sweep execute; each batch row, for revisions that report
+it (`Rod3DVelocity.sweeps`), the friction sweeps per pass per rod and the batch's largest (the
+batched loop sweeps until its slowest rod converges).
 """
 
 from __future__ import annotations
@@ -76,6 +78,34 @@ def loop_kernels(compiled_text: str) -> dict:
     return out
 
 
+def sweep_use(model, F, amplitudes, dt, steps):
+    """Friction sweeps per pass in a vmapped batch (the second pass of every step, `v.sweeps`):
+    the mean over rods and steps, and the mean over steps of the batch's largest (a batched
+    while loop runs until its slowest rod has converged). (0, 0) where the revision does not
+    report sweeps."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxrod.integrators import ProjectedVerlet
+    from jaxrod.rod3d import sine_velocity
+
+    integ = ProjectedVerlet(float(dt))
+
+    def one(a):
+        q, v = model.initial_state(F, lateral_velocity=sine_velocity(model, a))
+
+        def body(c, _):
+            q, v, acc, _ = integ.step(model, *c, 0.0, dt)
+            return (q, v, acc), v.sweeps
+
+        return jax.lax.scan(body, (q, v, model.accelerations(q, v, 0.0)), None, length=steps)[1]
+
+    if not hasattr(model.initial_state(F)[1], "sweeps"):
+        return 0.0, 0.0
+    k = jax.jit(jax.vmap(one))(amplitudes)
+    return float(jnp.mean(k)), float(jnp.mean(jnp.max(k, axis=0)))
+
+
 def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
     """Time one size in this process (imports jaxrod from sys.path)."""
     import jax
@@ -113,6 +143,8 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
             (amp, k), _, best = timed(compiled, arg, repeats=repeats, budget=float("inf"))
             k = int(jnp.max(k))
             counts = loop_kernels(compiled.as_text()) if kind == "single" else {}
+            if kind == "batch":
+                counts["sweeps_mean"], counts["sweeps_batch_max"] = sweep_use(model, F, arg, dt, k)
             rows.append(dict(**counts, n=n, setting=label, kind=kind, batch=B, steps=k, dt=dt, seconds=best,
                              us_per_rod_step=best / k / B * 1e6, compile_s=compile_s,
                              amplitude=float(jnp.ravel(amp)[0])))
@@ -156,6 +188,9 @@ def main():
                 r["revision"], r["round"] = name, round_
                 rows.append(r)
                 kern = f"   kernels: step {r['step_kernels']}, sweep {r['sweep_kernels']}" if "step_kernels" in r else ""
+                if r.get("sweeps_mean"):
+                    kern = (f"   sweeps per pass: {r['sweeps_mean']:.2f} per rod, {r['sweeps_batch_max']:.2f} "
+                            f"batch max ({r['sweeps_mean'] / r['sweeps_batch_max']:.0%} of lanes busy)")
                 print(f"n = {n:4d}  {name:14s} {r['setting']:9s} {r['kind']:6s} x{r['batch']:<3d} "
                       f"{r['us_per_rod_step']:9.1f} us per rod-step   amplitude {r['amplitude']:.9e}{kern}", flush=True)
     finally:
