@@ -86,25 +86,31 @@ def relative_rotation(A, B):
     return tuple(tuple(dot(A[a], B[c]) for c in range(3)) for a in range(3))
 
 
-def log_rotation(R):
-    """The rotation vector of R (as rows), as `jaxrod.rod3d.so3.log_so3`."""
+def log_rotation(R, with_trig: bool = False):
+    """The rotation vector ψ of R (as rows), as `jaxrod.rod3d.so3.log_so3`; with `with_trig`,
+    also (sin θ, cos θ) of its angle θ = |ψ| (from R itself: no sine or cosine evaluated)."""
     s = (0.5 * (R[2][1] - R[1][2]), 0.5 * (R[0][2] - R[2][0]), 0.5 * (R[1][0] - R[0][1]))
     c = 0.5 * (R[0][0] + R[1][1] + R[2][2] - 1.0)
     s2 = dot(s, s)
     small = s2 < 1e-6
     sns = jnp.sqrt(jnp.where(small, 1.0, s2))
     factor = jnp.where(small, 1.0 + s2 / 6.0 + 3.0 * s2**2 / 40.0, jnp.arctan2(sns, c) / sns)
-    return scale(factor, s)
+    if not with_trig:
+        return scale(factor, s)
+    r = jnp.sqrt(s2 + c * c)  # 1 for an exact rotation; normalise rounding away
+    return scale(factor, s), (jnp.sqrt(s2) / r, c / r)
 
 
-def left_jacobian_inv_t(psi, m):
+def left_jacobian_inv_t(psi, m, trig=None):
     """J_l(ψ)⁻ᵀ m = m + ½ ψ × m + c(θ) ψ × (ψ × m), c = 1/θ² − (1 + cos θ)/(2θ sin θ), θ = |ψ|
     (series 1/12 + θ²/720 + θ⁴/30240 below θ = 1e-2): the gradient of m · log(exp([δ]×) R)
-    with respect to δ at δ = 0, for ψ = log R (a left perturbation of R)."""
+    with respect to δ at δ = 0, for ψ = log R (a left perturbation of R). `trig`: (sin θ, cos θ)
+    if known (`log_rotation(R, with_trig=True)`), else evaluated."""
     th2 = dot(psi, psi)
     small = th2 < 1e-4
     ths = jnp.sqrt(jnp.where(small, 1.0, th2))
+    sin, cos = (jnp.sin(ths), jnp.cos(ths)) if trig is None else trig
     c = jnp.where(small, 1.0 / 12.0 + th2 / 720.0 + th2**2 / 30240.0,
-                  1.0 / ths**2 - (1.0 + jnp.cos(ths)) / (2.0 * ths * jnp.sin(ths)))
+                  1.0 / ths**2 - (1.0 + cos) / (2.0 * ths * jnp.where(small, 1.0, sin)))
     pm = cross(psi, m)
     return add(m, add(scale(0.5, pm), scale(c, cross(psi, pm))))

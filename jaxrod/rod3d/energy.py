@@ -99,6 +99,14 @@ def generalized_forces(model, x, Q):
     return c3.pack(f), c3.pack(tau)
 
 
+def _pen_three_halves(delta):
+    """max(δ, 0)^{3/2} as δ√δ (a power costs ~15× a square root on CPU), with a zero (not
+    NaN) derivative where there is no penetration."""
+    pos = delta > 0
+    pen = jnp.where(pos, delta, 0.0)
+    return jnp.where(pos, pen * jnp.sqrt(jnp.where(pos, pen, 1.0)), 0.0)
+
+
 def _shift(a, side):
     """`a` padded with one zero at the start ("left": entry i is a[i − 1]) or at the end
     ("right": entry i is a[i]): segment values seen from the nodes, joint values from the
@@ -128,14 +136,14 @@ def _conservative(model, X, Qr):
     upper = tuple(tuple(q[1:] for q in row) for row in Qr)
     lower = tuple(tuple(q[:-1] for q in row) for row in Qr)
     R = c3.relative_rotation(upper, lower)
-    psi = c3.log_rotation(R)
-    g = c3.left_jacobian_inv_t(psi, (rod.EI * psi[0] / l0, rod.EI * psi[1] / l0, rod.GJ * psi[2] / l0))
+    psi, trig = c3.log_rotation(R, with_trig=True)
+    g = c3.left_jacobian_inv_t(psi, (rod.EI * psi[0] / l0, rod.EI * psi[1] / l0, rod.GJ * psi[2] / l0), trig)
     g = computed_once(g, psi[0])  # read by the torques of both segments of a joint
     Rg = c3.rmatvec(R, g)
     tau = tuple(tau[k] + _shift(g[k], "left") - _shift(Rg[k], "right") for k in range(3))
     if model.channel:
         delta, e_r = _penetration(model, X)
-        el = model.voronoi * model.contact_stiffness * jnp.maximum(delta, 0.0) ** 1.5
+        el = model.voronoi * model.contact_stiffness * _pen_three_halves(delta)
         f = c3.sub(f, c3.scale(el, e_r))
     ext = model.mass[:, None] * model.g_vec[None, :] + model.voronoi[:, None] * model.body_force[None, :]
     if model.control == "load":
@@ -156,7 +164,7 @@ def _contact_normal(model, X, V):
     if not model.channel:
         z = jnp.zeros_like(delta)
         return z, z, e_r
-    el = model.voronoi * model.contact_stiffness * jnp.maximum(delta, 0.0) ** 1.5
+    el = model.voronoi * model.contact_stiffness * _pen_three_halves(delta)
     total = jnp.maximum(el * (1.0 + model.contact_damping * c3.dot(V, e_r)), 0.0)
     return total, total - el, e_r
 
