@@ -34,7 +34,8 @@ def computed_once(values, ref: Float[Array, "..."]):
     result: a value read by k kernels is recomputed k times (in the 3D rod's friction pass a
     slip impulse was recomputed in every kernel that updates a velocity, 3–4× the unique
     arithmetic). It never duplicates a division, so dividing by a 1 it cannot prove to be 1
-    (NaN where `ref` is NaN, 1 elsewhere; `ref` any array of the state, not a constant) makes
+    (NaN where `ref` is NaN, 1 elsewhere; `ref` any array of the state of the values' own shape,
+    not a constant and not a broadcast, which XLA would turn into a multiplication) makes
     the value one kernel's output that the others read. x/1 is exact: the values and their
     derivatives are unchanged (but for the compiler's choice of fused multiply-adds around the
     new kernel boundary, a rounding)."""
