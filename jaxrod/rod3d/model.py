@@ -33,7 +33,6 @@ from .stiffness import max_frequency
 __all__ = ["Rod3D"]
 
 
-
 class Rod3D(AbstractModel):
     """The discrete 3D rod in the channel. See the module docstring for every equation.
 
@@ -74,11 +73,9 @@ class Rod3D(AbstractModel):
       neighbouring nodes then left unconverged, which lets held contacts creep).
     - `friction_tol`: the pass stops once no contact impulse changes by more than this
       fraction of the largest friction bound μ_s N h in a sweep (default 1e-4); each pass
-      starts from the last one's impulses (a rod at rest on held contacts converges in one
-      sweep; a rolling–torsion oscillation against the wall changes the impulses from pass to
-      pass: 5–7 sweeps for the held rod of the tests, 2–9 in a sliding run). The residual and
-      the sweeps of the last pass are `v.residual` and `v.sweeps` (the observables
-      `friction_residual`, `friction_sweeps`).
+      starts from the last one's impulses (a rolling–torsion oscillation against the wall still
+      changes them between passes: 2–9 sweeps, 5–7 for a held rod). The last pass's residual
+      and sweeps: `v.residual`, `v.sweeps` (observables `friction_residual`, `friction_sweeps`).
     - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
       models assume) (static).
@@ -87,7 +84,6 @@ class Rod3D(AbstractModel):
     """
 
     held_is_fixed: ClassVar[bool] = False  # a stuck rod can creep at the contact (issue [rod3d])
-
 
     rod: RodChannel
     n_segments: int = eqx.field(static=True)
