@@ -235,8 +235,8 @@ def test_a_held_rod_stays_within_its_elastic_roll_with_contact_point_friction(n,
     # oscillates about its equilibrium: nothing damps the rolling–torsion mode)
     assert d[6:].max() < 1.3 * d[1:6].max()
     assert float(np.max(np.asarray(sol.observables["friction_residual"]))) <= 1e-4
-    # every pass converged before its cap (5-7 sweeps measured: the impulses follow the
-    # rolling-torsion oscillation that the holding friction sets up)
+    # every pass converged before its cap (5-7 sweeps measured: the held rod's elastic roll
+    # oscillates, so its impulses change from pass to pass)
     sweeps = np.asarray(sol.observables["friction_sweeps"])[1:]
     print(f"sweeps per pass at the saves: {sweeps.tolist()}")
     assert np.all(sweeps >= 1) and sweeps.max() < min(12, m.friction_sweeps)

@@ -73,8 +73,8 @@ class Rod3D(AbstractModel):
       neighbouring nodes then left unconverged, which lets held contacts creep).
     - `friction_tol`: the pass stops once no contact impulse changes by more than this
       fraction of the largest friction bound μ_s N h in a sweep (default 1e-4); each pass
-      starts from the last one's impulses (a rolling–torsion oscillation against the wall still
-      changes them between passes: 2–9 sweeps, 5–7 for a held rod). The last pass's residual
+      starts from the last one's impulses (sticking and slipping contacts still change them
+      between passes: 2–9 sweeps, 5–7 for a held rod). The last pass's residual
       and sweeps: `v.residual`, `v.sweeps` (observables `friction_residual`, `friction_sweeps`).
     - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
