@@ -119,13 +119,14 @@ def friction_pass(model, friction, x, v, Q, w, N, stuck, force, h):
     fields.update({f"J{k}": jnp.concatenate([Jf[:, k], jnp.zeros((1,), dtype)]) for k in range(3)})
     names = list(fields)
     table = jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in names])  # (fields, n + 1)
-    table = jnp.pad(table, ((0, 0), (0, 2 * M - table.shape[1]))).reshape(len(names), M, 2)
+    pad = jnp.asarray([1.0 if k in ("W11", "W22") else 0.0 for k in names], dtype)  # padded nodes are inert
+    table = jnp.concatenate([table, jnp.broadcast_to(pad[:, None], (len(names), 2 * M - table.shape[1]))], 1)
+    table = table.reshape(len(names), M, 2)
     colours = table[:, :, 0], table[:, :, 1]  # each (fields, M): a field is a contiguous row
 
     def fields_of(c):
         """The colour-`c` fields by name (read where they are used: inside the sweep loop)."""
         K = {k: colours[c][i] for i, k in enumerate(names)}
-        K["W11"], K["W22"] = jnp.where(K["W11"] == 0, 1.0, K["W11"]), jnp.where(K["W22"] == 0, 1.0, K["W22"])
         K["active"] = K["active"] > 0
         for name in ("t2", "fm", "g1l", "g2l", "g1r", "g2r", "J"):
             K[name] = tuple(K.pop(f"{name}{k}") for k in range(3))

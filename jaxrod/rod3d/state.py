@@ -94,7 +94,7 @@ def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_off
     v, w = model.constrain(v, jnp.zeros((n, 3), dtype))
     at_rest = jnp.all(v == 0, -1)  # a contact at rest starts under the static coefficient
     return Rod3DPosition(x, Q), Rod3DVelocity(v, w, at_rest, jnp.zeros((n + 1, 2), dtype), jnp.zeros((), dtype),
-                                              jnp.zeros((), x.dtype))
+                                              jnp.zeros((), dtype))
 
 
 def wall_angle(x: Float[Array, "... n1 3"]) -> Float[Array, "... n1"]:
