@@ -8,6 +8,10 @@ integrators and `simulate`, perturbations, `Scene`, `sweep`, and the boundary se
 `reproduce`).
 """
 
+from . import _xla
+
+_xla.configure()  # before JAX starts its CPU backend: see jaxrod/_xla.py
+
 from . import boundary as boundary
 from . import distributed as distributed
 from . import modal as modal
