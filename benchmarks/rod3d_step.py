@@ -19,6 +19,13 @@ Both revisions are checked to reach the same amplitude (printed). Rows go to
     python benchmarks/rod3d_step.py --ref 07402aa --n 60 120 500 --pairs 4  # paired rounds (~15 min)
     python benchmarks/rod3d_step.py --ref a5f4fbf~1 --quick  # n = 30, 60
 
+`--xla` chooses how XLA compiles the loops of every tree (rows carry it in `xla`):
+`shipped` (default: each tree as a user gets it; jaxrod since cc664ba adds
+`xla_cpu_small_while_loop_byte_threshold` to `XLA_FLAGS` on import, see `jaxrod/_xla.py`, older
+revisions do not), `on` (every tree with that option) and `off` (no tree with it).
+
+    python benchmarks/rod3d_step.py --ref a5f4fbf~1 c32af52 --n 60 500 --pairs 2 --xla shipped on
+
 Each single-rod row also counts the kernels (fusions and unfused ops of the optimised HLO) that
 one step's loop body and one friction sweep execute; each batch row, for revisions that report
 it (`Rod3DVelocity.sweeps`), the friction sweeps per pass per rod and the batch's largest (the
@@ -122,6 +129,7 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
     rod = RodChannel.reference(0.3)
     F = float(theory.reference_load(rod)) + 5.0
     rows = []
+    hoisted = "xla_cpu_small_while_loop_byte_threshold" in os.environ.get("XLA_FLAGS", "")
     for label, kw in (("converged", {}), ("1 sweep", dict(friction_sweeps=1))):
         model = Rod3D(rod, n, control="load", end_load=F, **kw)
         q0, _ = model.initial_state(F)
@@ -145,16 +153,29 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
             counts = loop_kernels(compiled.as_text()) if kind == "single" else {}
             if kind == "batch":
                 counts["sweeps_mean"], counts["sweeps_batch_max"] = sweep_use(model, F, arg, dt, k)
-            rows.append(dict(**counts, n=n, setting=label, kind=kind, batch=B, steps=k, dt=dt, seconds=best,
+            rows.append(dict(**counts, loops_one_function=hoisted, n=n, setting=label, kind=kind, batch=B, steps=k, dt=dt, seconds=best,
                              us_per_rod_step=best / k / B * 1e6, compile_s=compile_s,
                              amplitude=float(jnp.ravel(amp)[0])))
     return rows
 
 
-def _run(tree: str, n: int, steps: int, batch: int, repeats: int) -> list[dict]:
+XLA_OPTION = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=100000000"
+
+
+def _xla_env(condition: str) -> dict:
+    """The environment of a worker under an `--xla` condition."""
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "JAXROD_XLA_DEFAULTS")}
+    if condition == "on":
+        env["XLA_FLAGS"] = XLA_OPTION
+    elif condition == "off":
+        env["JAXROD_XLA_DEFAULTS"] = "0"
+    return env
+
+
+def _run(tree: str, n: int, steps: int, batch: int, repeats: int, xla: str = "shipped") -> list[dict]:
     code = (f"import sys, json; sys.path.insert(0, {tree!r}); sys.path.insert(1, {HERE!r}); "
             f"import rod3d_step as b; print(json.dumps(b.worker({n}, {steps}, {batch}, {repeats})))")
-    env = dict(os.environ, PYTHONPATH=tree)
+    env = dict(_xla_env(xla), PYTHONPATH=tree)
     out = subprocess.run([sys.executable, "-c", code], env=env, cwd=tree, capture_output=True, text=True)
     if out.returncode:
         raise SystemExit(f"the run at {tree} failed:\n{out.stderr[-2000:]}")
@@ -169,6 +190,8 @@ def main():
     ap.add_argument("--pairs", type=int, default=1,
                     help="rounds: each round runs every size in every tree in turn (A B A B ...); "
                          "speed-ups are the median over rounds of the ratio within a round")
+    ap.add_argument("--xla", nargs="*", default=["shipped"], choices=["shipped", "on", "off"],
+                    help="how XLA compiles loops, per tree (see the module docstring)")
     ap.add_argument("--out", default=os.path.join(HERE, "results", "rod3d_step.csv"))
     args = ap.parse_args()
     sizes = [(30, 1000), (60, 1000)] if args.quick else [(60, 2000), (120, 1500), (240, 1000), (500, 400)]
@@ -183,15 +206,16 @@ def main():
         trees.append((ref, tmp))
     rows = []
     try:
-        for round_, (n, steps), (name, tree) in ((k, size, t) for k in range(args.pairs) for size in sizes for t in trees):
-            for r in _run(tree, n, steps, batch, repeats):
-                r["revision"], r["round"] = name, round_
+        for round_, (n, steps), xla, (name, tree) in ((k, size, x, t) for k in range(args.pairs) for size in sizes
+                                                      for x in args.xla for t in trees):
+            for r in _run(tree, n, steps, batch, repeats, xla):
+                r["revision"], r["round"], r["xla"] = name, round_, xla
                 rows.append(r)
                 kern = f"   kernels: step {r['step_kernels']}, sweep {r['sweep_kernels']}" if "step_kernels" in r else ""
                 if r.get("sweeps_mean"):
                     kern = (f"   sweeps per pass: {r['sweeps_mean']:.2f} per rod, {r['sweeps_batch_max']:.2f} "
                             f"batch max ({r['sweeps_mean'] / r['sweeps_batch_max']:.0%} of lanes busy)")
-                print(f"n = {n:4d}  {name:14s} {r['setting']:9s} {r['kind']:6s} x{r['batch']:<3d} "
+                print(f"n = {n:4d}  xla {xla:7s} {name:14s} {r['setting']:9s} {r['kind']:6s} x{r['batch']:<3d} "
                       f"{r['us_per_rod_step']:9.1f} us per rod-step   amplitude {r['amplitude']:.9e}{kern}", flush=True)
     finally:
         for _, tree in trees[1:]:
@@ -199,15 +223,20 @@ def main():
     from _common import write_csv
 
     write_csv(args.out, rows)
-    for ref in args.ref:
-        for n, _ in sizes:
-            for setting, kind in (("converged", "single"), ("1 sweep", "single"), ("converged", "batch")):
-                sel = {(r["revision"], r["round"]): r["us_per_rod_step"] for r in rows
-                       if r["n"] == n and r["setting"] == setting and r["kind"] == kind}
-                ratios = [sel[ref, k] / sel["working tree", k] for k in range(args.pairs) if (ref, k) in sel]
-                if ratios:
-                    print(f"n = {n:4d}  {setting:9s} {kind:6s}: {statistics.median(ratios):.2f}x faster than {ref} "
-                          f"(rounds: {', '.join(f'{x:.2f}' for x in ratios)})")
+    # the working tree under each condition against each tree under each condition, round by round
+    for n, _ in sizes:
+        for setting, kind in (("converged", "single"), ("1 sweep", "single"), ("converged", "batch")):
+            sel = {(r["revision"], r["xla"], r["round"]): r["us_per_rod_step"] for r in rows
+                   if r["n"] == n and r["setting"] == setting and r["kind"] == kind}
+            for mine in args.xla:
+                for ref in args.ref:
+                    for theirs in args.xla:
+                        ratios = [sel[ref, theirs, k] / sel["working tree", mine, k] for k in range(args.pairs)
+                                  if (ref, theirs, k) in sel and ("working tree", mine, k) in sel]
+                        if ratios:
+                            print(f"n = {n:4d}  {setting:9s} {kind:6s}: working tree (xla {mine}) "
+                                  f"{statistics.median(ratios):.2f}x faster than {ref} (xla {theirs}) "
+                                  f"(rounds: {', '.join(f'{x:.2f}' for x in ratios)})")
     print("wrote", args.out)
 
 
