@@ -163,8 +163,8 @@ class _NoFrictionPass(Rod3D):
     in contact (N = 0), so `friction_step` returns its input and this is the same run; it
     measures what that pass costs when it has nothing to do."""
 
-    def friction_step(self, friction, x, v, Q, w, N, stuck, force, h):
-        return v, w, stuck, force, jnp.zeros((), x.dtype), jnp.zeros((), x.dtype)
+    def friction_step(self, friction, table, v, w, stuck, force, h):
+        return v, w, stuck, force, jnp.zeros((), v.dtype), jnp.zeros((), v.dtype)
 
 
 def best_of(fn, repeats: int):

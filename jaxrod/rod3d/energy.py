@@ -60,7 +60,8 @@ def _penetration(model, X):
     pos = r2 > 0
     r = jnp.where(pos, jnp.sqrt(jnp.where(pos, r2, 1.0)), 0.0)
     rs = jnp.where(pos, r, 1.0)
-    return r - model.rod.R, (jnp.zeros_like(r), jnp.where(pos, y / rs, 0.0), jnp.where(pos, z / rs, -1.0))
+    delta, e_r1, e_r2 = computed_once((r - model.rod.R, jnp.where(pos, y / rs, 0.0), jnp.where(pos, z / rs, -1.0)), y)
+    return delta, (jnp.zeros_like(r), e_r1, e_r2)
 
 
 def contact_energy(model, x):

@@ -22,9 +22,9 @@ from jaxtyping import Array, ArrayLike, Bool, Float
 from ..models.base import AbstractModel
 from ..params import RodChannel
 from ._checks import check_arguments
-from .._numerics import float_leaf
+from .._numerics import computed_once, float_leaf
 from . import energy
-from .contact import friction_pass
+from .contact import friction_pass, friction_table
 from . import components as c3
 from . import measures
 from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
@@ -250,8 +250,9 @@ class Rod3D(AbstractModel):
 
     def accelerations(self, q: Rod3DPosition, v: Rod3DVelocity, t=None) -> Rod3DForces:
         """Forces, torques and wall forces at `q` with velocities `v` (contact and viscous
-        damping depend on them)."""
-        return Rod3DForces(*self.forces(q.x, q.Q, v.v))
+        damping depend on them), and the friction pass's fields there (`friction_table`)."""
+        f, tau, N, fd = self.forces(q.x, q.Q, v.v)
+        return Rod3DForces(f, tau, N, fd, friction_table(self, q.x, q.Q, N))
 
     def kick(self, q, v: Rod3DVelocity, a: Rod3DForces, h) -> Rod3DVelocity:
         """Node velocities by f/m, spins by Euler's equations J ω̇ = τ − ω × Jω; held degrees of
@@ -267,7 +268,8 @@ class Rod3D(AbstractModel):
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
-        return Rod3DPosition(q.x + h * v.v, c3.pack_matrix(c3.rotate(c3.scale(-h, c3.unpack(v.w)), c3.unpack_matrix(q.Q))))
+        Q = computed_once(sum(c3.rotate(c3.scale(-h, c3.unpack(v.w)), c3.unpack_matrix(q.Q)), ()), q.Q[:, 0, 0])
+        return Rod3DPosition(q.x + h * v.v, c3.pack_matrix((Q[0:3], Q[3:6], Q[6:9])))
 
     def friction_bounds(self, t=None):
         """(μ_s, μ_d): the bounds are μ N per contact, N from the state (`friction_update`)."""
@@ -275,11 +277,10 @@ class Rod3D(AbstractModel):
 
     def friction_update(self, friction, v_trial: Rod3DVelocity, v_prev: Rod3DVelocity, h, t=None,
                         q: Rod3DPosition | None = None, a: Rod3DForces | None = None) -> Rod3DVelocity:
-        """The wall friction impulses of a (half) step `h` at the contact points of `q` under
-        the normal forces `a.N` (red–black, see the module docstring); a step of zero length
-        changes nothing (not even the stuck flags)."""
-        v, w, stuck, force, res, sweeps = self.friction_step(friction, q.x, v_trial.v, q.Q, v_trial.w, a.N,
-                                                             v_prev.stuck, v_trial.force, h)
+        """The wall friction impulses of a (half) step `h` at the contact points of `q` (their
+        fields: `a.table`); a step of zero length changes nothing (not even the stuck flags)."""
+        v, w, stuck, force, res, sweeps = self.friction_step(friction, a.table, v_trial.v, v_trial.w, v_prev.stuck,
+                                                             v_trial.force, h)
         v, w = self.constrain(v, w)
         moved = h > 0
         return Rod3DVelocity(v, w, jnp.where(moved, stuck, v_prev.stuck), jnp.where(moved, force, v_trial.force),
@@ -330,10 +331,10 @@ class Rod3D(AbstractModel):
     def forces(self, x, Q, v):
         return energy.forces(self, x, Q, v)
 
-    def friction_step(self, friction, x, v, Q, w, N, stuck, force, h):
-        """The friction impulses of a (half) step `h` [s] under the law `friction`: the new
-        (v, w, stuck, force, residual, sweeps) (`jaxrod.rod3d.contact.friction_pass`)."""
-        return friction_pass(self, friction, x, v, Q, w, N, stuck, force, h)
+    def friction_step(self, friction, table, v, w, stuck, force, h):
+        """The friction impulses of a (half) step `h` [s] under `friction` with the contacts' fields
+        `table`: the new (v, w, stuck, force, residual, sweeps) (`contact.friction_pass`)."""
+        return friction_pass(self, friction, table, v, w, stuck, force, h)
 
     # -- constraints and the step limit -------------------------------------------------------
     def constrain(self, v, w):

@@ -40,14 +40,17 @@ class Rod3DVelocity(eqx.Module):
 
 
 class Rod3DForces(eqx.Module):
-    """What a kick needs (the integrators' `a`): node forces `f` [N] (elastic, contact,
-    gravity, body, damping), material torques `tau` [N·m], wall normal forces `N` [N] and the
-    non-conservative (damping) part `fd` of the node forces [N]."""
+    """What a kick and a friction pass need at a position (the integrators' `a`): node forces
+    `f` [N] (elastic, contact, gravity, body, damping), material torques `tau` [N·m], wall
+    normal forces `N` [N], the non-conservative (damping) part `fd` of the node forces [N], and
+    `table`, the friction pass's fields of every contact there
+    (`jaxrod.rod3d.contact.friction_table`: both passes of a step are at one position)."""
 
     f: Float[Array, "n1 3"]
     tau: Float[Array, "n 3"]
     N: Float[Array, " n1"]
     fd: Float[Array, "n1 3"]
+    table: Float[Array, "fields m 2"]
 
 
 def at_rest(q: Rod3DPosition) -> Rod3DVelocity:
