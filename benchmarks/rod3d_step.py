@@ -67,12 +67,23 @@ def loop_kernels(compiled_text: str) -> dict:
     def ops(body):
         return [re.search(r"\s([a-z\-]+)\(", " " + ins.split(" ", 1)[1]).group(1) for ins in comps[body]]
 
+    # with XLA's loop option a loop is wrapped in a call of its own (`xla_cpu_small_call`):
+    # a loop's parent is the loop body that (through such calls) contains it
+    caller = {}
+    for comp in comps:
+        for ins in comps[comp]:
+            m = re.search(r"\scall\(.*to_apply=%?([\w.\-]+)", ins)
+            if m:
+                caller[m.group(1)] = comp
     loops = {}
     for body in comps:
         for ins in comps[body]:
             m = re.search(r"while\(.*body=%?([\w.\-]+)", ins)
             if m:
                 loops[m.group(1)] = body
+    for b in loops:
+        while loops[b] in caller:
+            loops[b] = caller[loops[b]]
     inner = {b: [c for c, parent in loops.items() if parent == b] for b in loops}
     out = dict(step_kernels=0, sweep_kernels=0)
     for b in loops:
