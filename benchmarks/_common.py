@@ -15,6 +15,23 @@ import time
 RESULTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
 
 
+# XLA's loop option as jaxrod sets it (jaxrod/_xla.py OPTION); written out here so that a run
+# of an older revision, which has no jaxrod._xla, can be given it too
+XLA_LOOP_OPTION = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=100000000"
+
+
+def xla_env(condition: str) -> dict:
+    """The environment of a benchmark's worker process under XLA's loop option: `shipped` (as
+    jaxrod sets it on import; older revisions do not), `on` (set explicitly) or `off`
+    (`JAXROD_XLA_DEFAULTS=0`). The parent's own `XLA_FLAGS` is not passed on."""
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "JAXROD_XLA_DEFAULTS")}
+    if condition == "on":
+        env["XLA_FLAGS"] = XLA_LOOP_OPTION
+    elif condition == "off":
+        env["JAXROD_XLA_DEFAULTS"] = "0"
+    return env
+
+
 def write_csv(path, rows, verbose=False):
     """One header line (every key of every row, in the order first seen), then one line per
     row (csv.DictWriter: missing keys left empty). Creates the folder; prints the path if

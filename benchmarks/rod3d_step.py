@@ -69,18 +69,12 @@ def loop_kernels(compiled_text: str) -> dict:
 
     # with XLA's loop option a loop is wrapped in a call of its own (`xla_cpu_small_call`):
     # a loop's parent is the loop body that (through such calls) contains it
-    caller = {}
-    for comp in comps:
-        for ins in comps[comp]:
-            m = re.search(r"\scall\(.*to_apply=%?([\w.\-]+)", ins)
-            if m:
-                caller[m.group(1)] = comp
-    loops = {}
-    for body in comps:
-        for ins in comps[body]:
-            m = re.search(r"while\(.*body=%?([\w.\-]+)", ins)
-            if m:
-                loops[m.group(1)] = body
+    def called(pattern):
+        """{computation called by an instruction matching `pattern`: the computation holding it}"""
+        return {m.group(1): comp for comp in comps for ins in comps[comp] if (m := re.search(pattern, ins))}
+
+    caller = called(r"\scall\(.*to_apply=%?([\w.\-]+)")
+    loops = called(r"while\(.*body=%?([\w.\-]+)")
     for b in loops:
         while loops[b] in caller:
             loops[b] = caller[loops[b]]
@@ -170,23 +164,12 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
     return rows
 
 
-XLA_OPTION = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=100000000"
-
-
-def _xla_env(condition: str) -> dict:
-    """The environment of a worker under an `--xla` condition."""
-    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "JAXROD_XLA_DEFAULTS")}
-    if condition == "on":
-        env["XLA_FLAGS"] = XLA_OPTION
-    elif condition == "off":
-        env["JAXROD_XLA_DEFAULTS"] = "0"
-    return env
-
-
 def _run(tree: str, n: int, steps: int, batch: int, repeats: int, xla: str = "shipped") -> list[dict]:
     code = (f"import sys, json; sys.path.insert(0, {tree!r}); sys.path.insert(1, {HERE!r}); "
             f"import rod3d_step as b; print(json.dumps(b.worker({n}, {steps}, {batch}, {repeats})))")
-    env = dict(_xla_env(xla), PYTHONPATH=tree)
+    from _common import xla_env
+
+    env = dict(xla_env(xla), PYTHONPATH=tree)
     out = subprocess.run([sys.executable, "-c", code], env=env, cwd=tree, capture_output=True, text=True)
     if out.returncode:
         raise SystemExit(f"the run at {tree} failed:\n{out.stderr[-2000:]}")

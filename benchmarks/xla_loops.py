@@ -37,20 +37,6 @@ sys.path.insert(0, HERE)
 WORKLOADS = ("field-1", "field-1024", "rod3d-1", "rod3d-64", "single-mode", "field-vstar")
 
 
-def _timed(f, arg, repeats=3):
-    import jax
-
-    t0 = time.perf_counter()
-    jax.block_until_ready(f(arg))
-    first = time.perf_counter() - t0
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(f(arg))
-        best = min(best, time.perf_counter() - t0)
-    return best, first - best
-
-
 def worker(name: str) -> dict:
     """One workload in this process: the steady run time [s] and the compile time [s]."""
     import jax
@@ -83,7 +69,9 @@ def worker(name: str) -> dict:
             return run(model, q, v, steps * dt, 3, dt, stop_on_buckle=False, stop_when_stuck=False).amplitude[-1]
 
         f, arg = (jax.jit(one), jnp.asarray(20e-3)) if B == 1 else (jax.jit(jax.vmap(one)), jnp.linspace(5e-3, 40e-3, B))
-        run_s, compile_s = _timed(f, arg)
+        from _common import time_jax
+
+        run_s, compile_s = time_jax(f, (arg,), 3)
     else:  # a boundary search: single mode, or the field model at its default resolution
         rod = jr.RodChannel.reference(0.3)
         kind = "mode" if name == "single-mode" else "field"
@@ -98,9 +86,9 @@ def worker(name: str) -> dict:
 
 
 def _run(name: str, on: bool) -> dict:
-    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "JAXROD_XLA_DEFAULTS")}
-    if not on:
-        env["JAXROD_XLA_DEFAULTS"] = "0"
+    from _common import xla_env
+
+    env = xla_env("shipped" if on else "off")
     code = f"import sys, json; sys.path.insert(0, {HERE!r}); import xla_loops as b; print(json.dumps(b.worker({name!r})))"
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     if out.returncode:

@@ -8,10 +8,11 @@ XLA compiles a `while` loop whose body touches fewer bytes per iteration than
 `xla_cpu_small_while_loop_byte_threshold` (1 kB by default) into one function instead
 (`SmallWhileLoopHoistingPass`). Raising that threshold to `SMALL_LOOP_BYTES` makes every
 jaxrod loop on arrays of ordinary size one function. Measured on a 2-core CPU
-(benchmarks/README.md, "XLA's loop threshold"): the 3D rod's step at 60 segments 2.2× faster;
-the field model at batch 1 1.3–2.5× faster; large batches (64–1024 members) unchanged within
-the machine's noise; compilation 10–40 % longer. The results are the same up to rounding (the
-compiler's choice of fused multiply–adds).
+(`benchmarks/xla_loops.py`, benchmarks/README.md "XLA's loop option"): one 3D rod at 60
+segments 2.9× faster, the field model at batch 1 2.0×, the single-mode v₀* search 2.0×, a batch
+of 1024 field rods unchanged; compilation 0.9–1.5× as long. The results are the same up to
+rounding (the compiler's choice of fused multiply–adds). The continuous-batching pool does not
+gain: its loops hold scatters, which the one-function emitter does not take.
 
 `configure` is called when jaxrod is imported: it adds the option to the environment variable
 `XLA_FLAGS` unless the user set `xla_backend_extra_options` there already (their choice is
