@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from .._trig import atan2, sincos
+
 __all__ = ["unpack", "pack", "unpack_matrix", "pack_matrix", "dot", "cross", "add", "sub", "scale",
            "matvec", "rmatvec", "rotate", "log_rotation", "left_jacobian_inv_t", "relative_rotation"]
 
@@ -67,12 +69,13 @@ def rmatvec(A, b):
 
 def rotate(phi, A):
     """exp([φ]×) A, column by column (Rodrigues: A_c + a φ × A_c + b φ × (φ × A_c)), with the
-    series of `jaxrod.rod3d.so3.exp_so3` below |φ| = 1e-4 rad."""
+    series of `jaxrod.rod3d.so3.exp_so3` below |φ| = 1e-4 rad (sine and cosine: `jaxrod._trig`)."""
     th2 = dot(phi, phi)
     small = th2 < 1e-8
     ths = jnp.sqrt(jnp.where(small, 1.0, th2))
-    a = jnp.where(small, 1.0 - th2 / 6.0, jnp.sin(ths) / ths)
-    b = jnp.where(small, 0.5 - th2 / 24.0, (1.0 - jnp.cos(ths)) / ths**2)
+    sin, cos = sincos(ths)
+    a = jnp.where(small, 1.0 - th2 / 6.0, sin / ths)
+    b = jnp.where(small, 0.5 - th2 / 24.0, (1.0 - cos) / ths**2)
     cols = []
     for c in range(3):
         col = (A[0][c], A[1][c], A[2][c])
@@ -94,7 +97,7 @@ def log_rotation(R, with_trig: bool = False):
     s2 = dot(s, s)
     small = s2 < 1e-6
     sns = jnp.sqrt(jnp.where(small, 1.0, s2))
-    factor = jnp.where(small, 1.0 + s2 / 6.0 + 3.0 * s2**2 / 40.0, jnp.arctan2(sns, c) / sns)
+    factor = jnp.where(small, 1.0 + s2 / 6.0 + 3.0 * s2**2 / 40.0, atan2(sns, c) / sns)
     if not with_trig:
         return scale(factor, s)
     r = jnp.sqrt(s2 + c * c)  # 1 for an exact rotation; normalise rounding away
@@ -109,7 +112,7 @@ def left_jacobian_inv_t(psi, m, trig=None):
     th2 = dot(psi, psi)
     small = th2 < 1e-4
     ths = jnp.sqrt(jnp.where(small, 1.0, th2))
-    sin, cos = (jnp.sin(ths), jnp.cos(ths)) if trig is None else trig
+    sin, cos = sincos(ths) if trig is None else trig
     c = jnp.where(small, 1.0 / 12.0 + th2 / 720.0 + th2**2 / 30240.0,
                   1.0 / ths**2 - (1.0 + cos) / (2.0 * ths * jnp.where(small, 1.0, sin)))
     pm = cross(psi, m)

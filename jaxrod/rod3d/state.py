@@ -8,6 +8,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 from .._numerics import float_leaf, safe_norm
+from .._trig import atan2
 
 
 __all__ = ["Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "at_rest", "straight_state", "wall_angle", "sine_velocity"]
@@ -102,8 +103,8 @@ def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_off
 
 def wall_angle(x: Float[Array, "... n1 3"]) -> Float[Array, "... n1"]:
     """Angle of each node from the channel bottom [rad], θ = atan2(y, −z) (as in the field
-    model); `x` may carry leading batch or time axes."""
-    return jnp.arctan2(x[..., 1], -x[..., 2])
+    model); `x` may carry leading batch or time axes (`jaxrod._trig.atan2`)."""
+    return atan2(x[..., 1], -x[..., 2])
 
 
 def sine_velocity(model, v0, mode: int = 6):
