@@ -96,8 +96,7 @@ def generalized_forces(model, x, Q):
     """Conservative node forces (n+1, 3) [N] and material torques (n, 3) [N·m]: minus the
     gradient of `potential` with respect to the node positions and to the rotations φ of
     Q → (I − [φ]×) Q, in closed form (see `_conservative`)."""
-    f, tau = _conservative(model, c3.unpack(x), c3.unpack_matrix(Q))
-    return c3.pack(f), c3.pack(tau)
+    return _conservative(model, c3.unpack(x), c3.unpack_matrix(Q))
 
 
 def _pen_three_halves(delta):
@@ -117,7 +116,8 @@ def _shift(a, side):
 
 
 def _conservative(model, X, Qr):
-    """Node forces and material torques as component tuples.
+    """Node forces (n+1, 3) and material torques (n, 3) from positions and directors as
+    component tuples.
 
     Stretch and shear: with the material stress n = S σ (S = diag(κGA, κGA, EA)), segment j
     pulls node j + 1 back and node j on by Qⱼᵀ nⱼ, and turns by (Qⱼ eⱼ) × nⱼ. Bend and twist:
@@ -131,8 +131,10 @@ def _conservative(model, X, Qr):
     Qe = c3.matvec(Qr, e)
     kGA = model.shear_coefficient * rod.GA
     stress = (kGA * Qe[0] / l0, kGA * Qe[1] / l0, rod.EA * (Qe[2] / l0 - 1.0))
-    F = c3.rmatvec(Qr, stress)  # lab
-    f = tuple(_shift(F[k], "right") - _shift(F[k], "left") for k in range(3))
+    # segment values to nodes and joint values to segments as differences of one padded (·, 3)
+    # array: shifts by concatenation inside a fused kernel are evaluated element by element
+    Fp = jnp.pad(c3.pack(c3.rmatvec(Qr, stress)), ((1, 1), (0, 0)))  # lab, zero beyond the ends
+    f = Fp[1:] - Fp[:-1]
     tau = c3.cross(Qe, stress)
     upper = tuple(tuple(q[1:] for q in row) for row in Qr)
     lower = tuple(tuple(q[:-1] for q in row) for row in Qr)
@@ -141,16 +143,15 @@ def _conservative(model, X, Qr):
     g = c3.left_jacobian_inv_t(psi, (rod.EI * psi[0] / l0, rod.EI * psi[1] / l0, rod.GJ * psi[2] / l0), trig)
     g = computed_once(g, psi[0])  # read by the torques of both segments of a joint
     Rg = c3.rmatvec(R, g)
-    tau = tuple(tau[k] + _shift(g[k], "left") - _shift(Rg[k], "right") for k in range(3))
+    tau = (c3.pack(tau) + jnp.pad(c3.pack(g), ((1, 0), (0, 0)))) - jnp.pad(c3.pack(Rg), ((0, 1), (0, 0)))
     if model.channel:
         delta, e_r = _penetration(model, X)
         el = model.voronoi * model.contact_stiffness * _pen_three_halves(delta)
-        f = c3.sub(f, c3.scale(el, e_r))
+        f = f - el[:, None] * c3.pack(e_r)
     ext = model.mass[:, None] * model.g_vec[None, :] + model.voronoi[:, None] * model.body_force[None, :]
     if model.control == "load":
         ext = ext.at[-1, 0].add(-model.end_load)
-    f = c3.add(f, c3.unpack(ext.astype(dtype)))
-    return f, tau
+    return f + ext.astype(dtype), tau
 
 
 def contact_normal(model, x, v):
@@ -178,8 +179,8 @@ def forces(model, x, Q, v):
     f, tau = _conservative(model, X, c3.unpack_matrix(Q))
     N, N_damp, e_r = _contact_normal(model, X, V)
     cm = model.damping * model.mass
-    f_damp = tuple(-N_damp * e_r[k] - cm * V[k] for k in range(3))
-    return c3.pack(c3.add(f, f_damp)), c3.pack(tau), N, c3.pack(f_damp)
+    f_damp = c3.pack(tuple(-N_damp * e_r[k] - cm * V[k] for k in range(3)))
+    return f + f_damp, tau, N, f_damp
 
 
 def impulse_work(model, v_prev, v_trial, v_after, a, h):
