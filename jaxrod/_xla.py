@@ -12,7 +12,8 @@ jaxrod loop on arrays of ordinary size one function. Measured on a 2-core CPU
 segments 2.9× faster, the field model at batch 1 2.0×, the single-mode v₀* search 2.0×, a batch
 of 1024 field rods unchanged; compilation 0.9–1.5× as long. The results are the same up to
 rounding (the compiler's choice of fused multiply–adds). The continuous-batching pool does not
-gain: its loops hold scatters, which the one-function emitter does not take.
+gain: its lanes' steps are already arithmetic-bound (a pool without scatters, which XLA then
+compiles as one function, measured no faster: benchmarks/README.md, sweeps).
 
 `configure` is called when jaxrod is imported: it adds the option to the environment variable
 `XLA_FLAGS` unless the user set `xla_backend_extra_options` there already (their choice is
