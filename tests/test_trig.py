@@ -1,6 +1,7 @@
 """`jaxrod._trig`: the vectorised sine, cosine and arctangent agree with the C library to 2 units
-in the last place over the ranges the rod uses and beyond, in float64 and float32, keep the
-library's special values, and differentiate to the exact derivatives."""
+in the last place over the ranges the rod uses and beyond (float64; other dtypes go to `jnp`,
+checked as well), keep the library's special values, and differentiate to the exact
+derivatives."""
 
 import jax
 import jax.numpy as jnp

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._numerics import computed_once, safe_hypot
 from . import components as c3
-from .energy import _penetration, _shift
+from .energy import _penetration
 
 __all__ = ["node_weights", "FIELDS", "friction_table", "friction_pass"]
 
@@ -33,6 +33,14 @@ def node_weights(model):
     right = np.r_[np.ones(n), 0.0]
     count = left + right
     return jnp.asarray(left / count), jnp.asarray(right / count)
+
+
+def _shift(a, side):
+    """`a` padded with one zero at the start ("left": entry i is a[i − 1]) or at the end
+    ("right": entry i is a[i]): segment values seen from the nodes, joint values from the
+    segments."""
+    zero = jnp.zeros((1,) + a.shape[1:], a.dtype)
+    return jnp.concatenate([zero, a]) if side == "left" else jnp.concatenate([a, zero])
 
 
 def colours(n: int) -> int:

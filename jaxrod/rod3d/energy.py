@@ -107,14 +107,6 @@ def _pen_three_halves(delta):
     return jnp.where(pos, pen * jnp.sqrt(jnp.where(pos, pen, 1.0)), 0.0)
 
 
-def _shift(a, side):
-    """`a` padded with one zero at the start ("left": entry i is a[i − 1]) or at the end
-    ("right": entry i is a[i]): segment values seen from the nodes, joint values from the
-    segments."""
-    zero = jnp.zeros((1,) + a.shape[1:], a.dtype)
-    return jnp.concatenate([zero, a]) if side == "left" else jnp.concatenate([a, zero])
-
-
 def _conservative(model, X, Qr):
     """Node forces (n+1, 3) and material torques (n, 3) from positions and directors as
     component tuples.
