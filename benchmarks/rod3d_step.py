@@ -10,7 +10,10 @@ compilation:
 
 - single rod, the default converged friction pass (`friction_tol` 1e-4) and one sweep
   (`friction_sweeps=1`);
-- a `jax.vmap` batch of 64 rods (amplitudes 5–40 mm/s; a quarter of the steps), per rod.
+- a `jax.vmap` batch of 64 rods (amplitudes 5–40 mm/s; a quarter of the steps), per rod;
+- the same 64 rods through the common sweep, `jaxrod.sweep` (`sweep_worker`: each tree's default
+  scheduling and lanes, one XLA device per core as `jaxrod map` sets it; members stop when they
+  buckle or stick), per rod-step taken (`--no-sweep` skips it).
 
 Both revisions are checked to reach the same amplitude (printed). Rows go to
 `benchmarks/results/rod3d_step.csv`.
@@ -36,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -164,12 +168,50 @@ def worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
     return rows
 
 
-def _run(tree: str, n: int, steps: int, batch: int, repeats: int, xla: str = "shipped") -> list[dict]:
+def sweep_worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
+    """`batch` rods through the common sweep (`jaxrod.sweep`, model "rod3d", each tree's default
+    scheduling and lanes) on every XLA device of this process: dead load F⁰₆ + 5 N, sine mode-6
+    velocity amplitudes 5–40 mm/s, horizon a quarter of `steps` steps of 0.5 of the step limit;
+    members stop when they buckle or stick, as in any sweep. Per rod-step = wall time / the steps
+    the members took (`meta["member_steps"]`, printed: both trees must agree)."""
+    import jax
+    import numpy as np
+
+    jax.config.update("jax_enable_x64", True)
+    from jaxrod import SweepSpec, sweep, theory
+    from jaxrod.params import RodChannel
+    from jaxrod.rod3d import Rod3D, step_limit
+
+    rod = RodChannel.reference(0.3)
+    F = float(theory.reference_load(rod)) + 5.0
+    model = Rod3D(rod, n, control="load", end_load=F)
+    dt = 0.5 * float(step_limit(model, model.initial_state(F)[0]))
+    spec = SweepSpec(model="rod3d", n=n, mu=0.3, dF=5.0, t1=max(100, steps // 4) * dt)
+    inputs = {"amplitude": np.linspace(5e-3, 40e-3, batch)}
+    t0 = time.perf_counter()
+    res = sweep(spec, inputs, progress=False)  # compiles
+    compile_s = time.perf_counter() - t0
+    best = math.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        res = sweep(spec, inputs, progress=False)
+        best = min(best, time.perf_counter() - t0)
+    k = int(res.meta["member_steps"])
+    return [dict(n=n, setting="converged", kind="sweep", batch=batch, steps=k, dt=float(res.meta["dt"]), seconds=best,
+                 us_per_rod_step=best / k * 1e6, compile_s=compile_s, devices=jax.local_device_count(),
+                 lanes=int(res.meta["lanes"]), buckled=int(np.sum(res.outputs["buckled"])),
+                 amplitude=float(np.max(res.outputs["max_theta"])))]
+
+
+def _run(tree: str, n: int, steps: int, batch: int, repeats: int, xla: str = "shipped", kind: str = "worker") -> list[dict]:
     code = (f"import sys, json; sys.path.insert(0, {tree!r}); sys.path.insert(1, {HERE!r}); "
-            f"import rod3d_step as b; print(json.dumps(b.worker({n}, {steps}, {batch}, {repeats})))")
+            f"import rod3d_step as b; print(json.dumps(b.{kind}({n}, {steps}, {batch}, {repeats})))")
     from _common import xla_env
 
     env = dict(xla_env(xla), PYTHONPATH=tree)
+    if kind == "sweep_worker":  # one XLA device per core, as `jaxrod map` sets it
+        flags = f"{env.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count={os.cpu_count() or 1}"
+        env["XLA_FLAGS"] = flags.strip()
     out = subprocess.run([sys.executable, "-c", code], env=env, cwd=tree, capture_output=True, text=True)
     if out.returncode:
         raise SystemExit(f"the run at {tree} failed:\n{out.stderr[-2000:]}")
@@ -186,6 +228,8 @@ def main():
                          "speed-ups are the median over rounds of the ratio within a round")
     ap.add_argument("--xla", nargs="*", default=["shipped"], choices=["shipped", "on", "off"],
                     help="how XLA compiles loops, per tree (see the module docstring)")
+    ap.add_argument("--sweep", action=argparse.BooleanOptionalAction, default=True,
+                    help="also time the batch through jaxrod.sweep on one XLA device per core (kind `sweep`)")
     ap.add_argument("--out", default=os.path.join(HERE, "results", "rod3d_step.csv"))
     args = ap.parse_args()
     sizes = [(30, 1000), (60, 1000)] if args.quick else [(60, 2000), (120, 1500), (240, 1000), (500, 400)]
@@ -202,10 +246,15 @@ def main():
     try:
         for round_, (n, steps), xla, (name, tree) in ((k, size, x, t) for k in range(args.pairs) for size in sizes
                                                       for x in args.xla for t in trees):
-            for r in _run(tree, n, steps, batch, repeats, xla):
+            out = _run(tree, n, steps, batch, repeats, xla)
+            if batch > 1 and args.sweep:
+                out += _run(tree, n, steps, batch, repeats, xla, kind="sweep_worker")
+            for r in out:
                 r["revision"], r["round"], r["xla"] = name, round_, xla
                 rows.append(r)
                 kern = f"   kernels: step {r['step_kernels']}, sweep {r['sweep_kernels']}" if "step_kernels" in r else ""
+                if r["kind"] == "sweep":
+                    kern = f"   {r['devices']} devices, {r['lanes']} lane(s) each, {r['steps']} member steps, {r['buckled']} buckled"
                 if r.get("sweeps_mean"):
                     kern = (f"   sweeps per pass: {r['sweeps_mean']:.2f} per rod, {r['sweeps_batch_max']:.2f} "
                             f"batch max ({r['sweeps_mean'] / r['sweeps_batch_max']:.0%} of lanes busy)")
@@ -219,7 +268,8 @@ def main():
     write_csv(args.out, rows)
     # the working tree under each condition against each tree under each condition, round by round
     for n, _ in sizes:
-        for setting, kind in (("converged", "single"), ("1 sweep", "single"), ("converged", "batch")):
+        for setting, kind in (("converged", "single"), ("1 sweep", "single"), ("converged", "batch"),
+                              ("converged", "sweep")):
             sel = {(r["revision"], r["xla"], r["round"]): r["us_per_rod_step"] for r in rows
                    if r["n"] == n and r["setting"] == setting and r["kind"] == kind}
             for mine in args.xla:

@@ -31,6 +31,9 @@ no longer sets the step; PyElastica's is unscaled. So:
      best over all its runs, the one both ratios use.
    - batch: `jax.vmap` of `_run` over 64 amplitudes a in [0.5, 2] x `A0`, `--batch-steps` steps;
      per-rod throughput (rod-steps/s) against PyElastica's single-rod steps/s. Target >= 10x.
+     And the same 64 rods as `jaxrod.sweep` runs 3D rods (`batch_lanes`): one XLA device per
+     core (set here before JAX starts, as `jaxrod map` does), each running its share one rod at
+     a time (`jax.pmap` of `lax.map` of `_run`).
 2. **Agreement**: the midpoint lateral displacement y(L/2, t) after the same simulated time.
    (a) alpha = 1 in both (unmodified PyElastica, jaxrod with `rotary_scale=1.0`), dt = 0.5 x
    jaxrod's (much smaller) step limit at alpha = 1, horizon at least a quarter of the
@@ -74,6 +77,12 @@ except ImportError as err:  # optional dependency: CI does not install it
         f"({err}); install it with `pip install -e '.[pyelastica]'`. Nothing to benchmark."
     )
     sys.exit(0)
+
+# one XLA device per core, as `jaxrod map` sets it (the `lanes` batch below runs one rod per device
+# at a time); single-rod runs use the first device either way
+if "xla_force_host_platform_device_count" not in os.environ.get("XLA_FLAGS", ""):
+    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") +
+                               f" --xla_force_host_platform_device_count={os.cpu_count() or 1}").strip()
 
 import jax  # noqa: E402
 
@@ -250,6 +259,19 @@ def speed(n: int, steps: int, batch_steps: int, repeats: int) -> list[dict]:
         t_b = min(t_b, t)
         t_bb = min(t_bb, best_of(lambda: jax.block_until_ready(run_batch(bare, states)), 1)[0])
         t_pe = min(t_pe, time_pyelastica()[0])
+    # the same batch as jaxrod.sweep runs 3D rods: one lane per device (the rods of a device's share
+    # one after another, `lax.map`), the devices in parallel
+    D = jax.local_device_count()
+    per = -(-BATCH // D)
+    lanes_states = jax.tree_util.tree_map(
+        lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], per * D - BATCH, 0)]).reshape((D, per) + a.shape[1:]), states)
+    run_lanes = jax.pmap(lambda s: jax.lax.map(lambda x: _run(model, x, dt, batch_steps), s))
+    jax.block_until_ready(run_lanes(lanes_states))
+    t_l = math.inf
+    for _ in range(max(1, repeats - 1)):
+        t, cl = best_of(lambda: jax.block_until_ready(run_lanes(lanes_states)), 1)
+        t_l = min(t_l, t)
+    xl = np.asarray(cl[0][0].x).reshape((per * D,) + cl[0][0].x.shape[2:])[:BATCH]
     yb = np.asarray(cb[0][0].x[:, mid, 1])
     assert np.all(np.isfinite(np.asarray(cb[0][0].x))) and np.all(np.asarray(cb[1]) == batch_steps)
     # small amplitudes: y_mid / a is the same for every member (a check that vmap ran them all)
@@ -269,6 +291,10 @@ def speed(n: int, steps: int, batch_steps: int, repeats: int) -> list[dict]:
         dict(test="rod_steps_per_s_batch", **common, steps=batch_steps, batch=BATCH, jaxrod=rps_b,
              pyelastica=sps_pe, ratio=rps_b / sps_pe, jaxrod_compile_s=first_b - t_b,
              note=f"pyelastica single rod; y/a spread over the batch {linear_dev:.1e}"),
+        dict(test="rod_steps_per_s_batch_lanes", **common, steps=batch_steps, batch=BATCH,
+             jaxrod=BATCH * batch_steps / t_l, pyelastica=sps_pe, ratio=BATCH * batch_steps / t_l / sps_pe,
+             note=(f"{D} devices, one rod per device at a time (as jaxrod.sweep runs rod3d); largest difference "
+                   f"from the vmapped batch {float(np.max(np.abs(xl - np.asarray(cb[0][0].x)))):.1e} m")),
         dict(test="rod_steps_per_s_batch_no_friction_pass", **common, steps=batch_steps, batch=BATCH,
              jaxrod=BATCH * batch_steps / t_bb, pyelastica=sps_pe, ratio=BATCH * batch_steps / t_bb / sps_pe,
              note="diagnostic: the batch with Rod3D.friction_step (idle here) skipped"),

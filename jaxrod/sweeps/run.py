@@ -23,6 +23,12 @@ from .store import _atomic_write, _chunk_file, _dump_json, _fingerprint, _meta_f
 
 __all__ = ['sweep']
 
+# Lanes per device when `sweep` is not told: the 3D rod's arrays of n segments already fill the
+# vector units, and a batch of them only adds memory traffic and friction sweeps run for the
+# slowest lane — 64 rods on 2 devices cost 17 / 74 µs per rod-step at 60 / 500 segments in 1
+# lane per device against 19 / 116 in 16 (benchmarks/README.md, "Batched 3D rods").
+LANES_OF_MODEL = {"rod3d": 1}
+
 
 def _expand(inputs: Mapping[str, object], combine: str):
     names = tuple(inputs)
@@ -72,7 +78,7 @@ def sweep(
     progress: bool = True,
     on_chunk: Callable[[int], None] | None = None,
     scheduling: str = "pool",
-    lanes: int = DEFAULT_LANES,
+    lanes: int | None = None,
     refill_every: int = DEFAULT_REFILL_EVERY,
 ) -> SweepResult:
     """Run one rod per member of `inputs` and collect per-member results.
@@ -100,6 +106,7 @@ def sweep(
     - `scheduling`: `"pool"` (default): continuous batching — each device runs `lanes` members
       side by side and a lane whose member has stopped takes the next pending one every
       `refill_every` steps, inside one compiled loop ([`jaxrod.batching.run_pool`][]);
+      `lanes` defaults to 16 for the reduced models and 1 for `"rod3d"` (`LANES_OF_MODEL`);
       `"chunk"`: the whole chunk vmapped at once, running until its slowest member stops
       (kept for comparison). Results are identical either way.
 
@@ -145,6 +152,8 @@ def sweep(
         raise ValueError(f"chunk_size = {chunk_size!r} is invalid: expected an int >= 1.")
     if scheduling not in ("pool", "chunk"):
         raise ValueError(f"scheduling = {scheduling!r} is invalid: expected 'pool' or 'chunk'.")
+    if lanes is None:
+        lanes = LANES_OF_MODEL.get(spec.model, DEFAULT_LANES)
     for name, val in (("lanes", lanes), ("refill_every", refill_every)):
         if not (isinstance(val, int) and val >= 1):
             raise ValueError(f"{name} = {val!r} is invalid: expected an int >= 1.")
