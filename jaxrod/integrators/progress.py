@@ -14,6 +14,8 @@ def tick(done, total, stopped) -> None:
     the run stops early (buckled, stuck or non-finite)."""
     done, total, stopped = int(done), int(total), bool(stopped)
     bar = _BAR.get("bar")
+    if bar is None and done > 1:  # the later saves of a run that stopped (its bar is closed)
+        return
     if bar is None or done <= bar.n:  # a new run
         if bar is not None:
             bar.close()
