@@ -78,6 +78,23 @@ def test_a_run_with_a_progress_bar_equals_one_without(early_exit, capfd):
     assert "run:" in err and "save" in err
 
 
+def test_the_later_saves_of_a_stopped_run_open_no_new_progress_bar(capfd):
+    """The saves run in a loop of known length, so a run that stopped still reports its later
+    save intervals (with `stopped` set): they draw nothing, and the next run gets its own bar."""
+    from jaxrod.integrators import progress
+
+    progress.tick(1, 10, False)
+    progress.tick(2, 10, True)  # the run stops: its bar closes
+    capfd.readouterr()
+    for i in range(3, 11):
+        progress.tick(i, 10, True)
+    assert capfd.readouterr().err == "" and "bar" not in progress._BAR
+    progress.tick(1, 10, False)  # a new run
+    assert progress._BAR["bar"].n == 1
+    progress.tick(10, 10, False)
+    assert "bar" not in progress._BAR
+
+
 def test_a_traced_smoothing_width_is_differentiable_through_simulate():
     """The step-limit check runs at trace time only when both the model and the scheme's
     parameters are concrete: with a friction smoothing width traced by `jit` (the failure
