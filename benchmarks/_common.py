@@ -20,6 +20,14 @@ RESULTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
 XLA_LOOP_OPTION = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=100000000"
 
 
+def with_devices(flags: str, devices: int | None = None) -> str:
+    """`flags` (an `XLA_FLAGS` value) with `devices` XLA CPU devices (default one per core, as
+    `jaxrod map` sets it), unless `flags` already sets a device count (its choice is kept)."""
+    if "xla_force_host_platform_device_count" in flags:
+        return flags
+    return f"{flags} --xla_force_host_platform_device_count={devices or os.cpu_count() or 1}".strip()
+
+
 def xla_env(condition: str) -> dict:
     """The environment of a benchmark's worker process under XLA's loop option: `shipped` (as
     jaxrod sets it on import; older revisions do not), `on` (set explicitly) or `off`

@@ -88,10 +88,9 @@ def main():
     ap.add_argument("--devices", type=int, default=None, help="XLA CPU devices (lanes; default: one per core)")
     a = ap.parse_args()
     if a.what == "lanes":
-        flags = os.environ.get("XLA_FLAGS", "")
-        if "xla_force_host_platform_device_count" not in flags:
-            D = a.devices or os.cpu_count() or 1
-            os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={D}".strip()
+        from _common import with_devices
+
+        os.environ["XLA_FLAGS"] = with_devices(os.environ.get("XLA_FLAGS", ""), a.devices)
         lanes(a.n, a.lanes, a.t1)
     else:
         width(a.n, a.widths)

@@ -206,12 +206,11 @@ def sweep_worker(n: int, steps: int, batch: int, repeats: int) -> list[dict]:
 def _run(tree: str, n: int, steps: int, batch: int, repeats: int, xla: str = "shipped", kind: str = "worker") -> list[dict]:
     code = (f"import sys, json; sys.path.insert(0, {tree!r}); sys.path.insert(1, {HERE!r}); "
             f"import rod3d_step as b; print(json.dumps(b.{kind}({n}, {steps}, {batch}, {repeats})))")
-    from _common import xla_env
+    from _common import with_devices, xla_env
 
     env = dict(xla_env(xla), PYTHONPATH=tree)
     if kind == "sweep_worker":  # one XLA device per core, as `jaxrod map` sets it
-        flags = f"{env.get('XLA_FLAGS', '')} --xla_force_host_platform_device_count={os.cpu_count() or 1}"
-        env["XLA_FLAGS"] = flags.strip()
+        env["XLA_FLAGS"] = with_devices(env.get("XLA_FLAGS", ""))
     out = subprocess.run([sys.executable, "-c", code], env=env, cwd=tree, capture_output=True, text=True)
     if out.returncode:
         raise SystemExit(f"the run at {tree} failed:\n{out.stderr[-2000:]}")

@@ -80,9 +80,9 @@ except ImportError as err:  # optional dependency: CI does not install it
 
 # one XLA device per core, as `jaxrod map` sets it (the `lanes` batch below runs one rod per device
 # at a time); single-rod runs use the first device either way
-if "xla_force_host_platform_device_count" not in os.environ.get("XLA_FLAGS", ""):
-    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") +
-                               f" --xla_force_host_platform_device_count={os.cpu_count() or 1}").strip()
+from _common import with_devices, write_csv  # noqa: E402
+
+os.environ["XLA_FLAGS"] = with_devices(os.environ.get("XLA_FLAGS", ""))
 
 import jax  # noqa: E402
 
@@ -93,7 +93,6 @@ import jax.numpy as jnp  # noqa: E402
 import jaxrod as jr  # noqa: E402
 from jaxrod.rod3d import Rod3D, step_limit  # noqa: E402
 
-from _common import write_csv  # noqa: E402
 
 L = 0.3  # m
 A0 = 1e-3  # m/s: lateral velocity amplitude (midpoint displacement ~ A0 / w1 = 7 um)
