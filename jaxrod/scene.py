@@ -12,7 +12,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from . import theory
-from .integrators import ProjectedVerlet
+from .integrators import AbstractFixedStep, ProjectedVerlet, default_for
 from .integrators.base import RunOptions
 from .models import FieldModel, GalerkinModel, SingleMode
 from .params import RodChannel
@@ -203,8 +203,10 @@ class Scene(eqx.Module):
             return dt
         return min(dt, GROWTH_FRACTION / lam) if lam > 0 else dt
 
-    def integrator(self) -> ProjectedVerlet:
-        return ProjectedVerlet(self.step())
+    def integrator(self) -> AbstractFixedStep:
+        """The run's integrator: the model's default scheme (`jaxrod.integrators.default_for`:
+        projected leapfrog for the 3D rod, projected Verlet for the reduced models) at `step()`."""
+        return default_for(self.model(), self.step())
 
     def initial_state(self):
         """(q₀, v₀) in the model's coordinates."""

@@ -46,12 +46,12 @@ def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK):
     step `dt` [s]) — with the defaults the same run as the scene `Scene(kind="rod3d")`, with
     `friction_at` and `ends` passed to [`jaxrod.rod3d.Rod3D`][], the wall's Hertz constant set so
     that the rod sinks `sink`·R into it under its weight (`Rod3D`'s default: 1e-3)."""
-    from ..integrators import ProjectedVerlet
+    from ..integrators import ProjectedLeapfrog
     from ..integrators.base import RunOptions
     from ..rod3d import Rod3D
     from ..simulate import simulate
 
-    integrator = ProjectedVerlet(dt)
+    integrator = ProjectedLeapfrog(dt)  # the 3D rod's default scheme (`Rod3D.scheme`)
 
     @jax.jit
     def buckled(dF, v0):

@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import theory
 from ..params import RodChannel
-from ..integrators import ProjectedVerlet
+from ..integrators import default_for
 from ..integrators.base import RunOptions
 from ..output import subplots, write_csv
 from ..simulate import simulate
@@ -32,11 +32,12 @@ SIZES = {
 
 def run(model, q0, v0, t1, n_save, dt, *, threshold=0.5, stop_on_buckle=True, stop_when_stuck=True,
         save_state=False, progress=False):
-    """One [`jaxrod.simulate`][] run of the 3D rod with projected Verlet and the options of
+    """One [`jaxrod.simulate`][] run of the 3D rod with its default scheme (projected leapfrog,
+    `jaxrod.integrators.default_for`) and the options of
     [`jaxrod.RunOptions`][] (same names and defaults; vmap it for a batch, without `progress`)."""
     opts = RunOptions(buckle_threshold=threshold, stop_on_buckle=stop_on_buckle,
                       stop_when_stuck=stop_when_stuck, save_state=save_state, progress=progress)
-    return simulate(model, ProjectedVerlet(float(dt)), q0, v0, t1, n_save=n_save, options=opts, throw=False)
+    return simulate(model, default_for(model, float(dt)), q0, v0, t1, n_save=n_save, options=opts, throw=False)
 
 
 def _batched(model, states, t1, n_save, dt, threshold, stop_on_buckle=True, stop_when_stuck=True):

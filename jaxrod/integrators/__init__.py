@@ -6,3 +6,11 @@ from .explicit import SplitLinearFriction as SplitLinearFriction
 from .explicit import SymplecticEuler as SymplecticEuler
 from .smooth import DiffraxSmooth as DiffraxSmooth
 from .verlet import ProjectedVerlet as ProjectedVerlet
+from .leapfrog import ProjectedLeapfrog as ProjectedLeapfrog
+
+
+def default_for(model, dt: float, **kwargs) -> AbstractFixedStep:
+    """The fixed-step integrator a run of `model` uses by default, step `dt` [s] (`kwargs`, e.g.
+    `friction`, go to it): the model's `scheme`, [`jaxrod.ProjectedLeapfrog`][] (`"leapfrog"`,
+    the 3D rod) or [`jaxrod.ProjectedVerlet`][] (`"verlet"`, the reduced models)."""
+    return {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet}[model.scheme](dt, **kwargs)

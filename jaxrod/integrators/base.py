@@ -171,6 +171,12 @@ class AbstractFixedStep(AbstractIntegrator):
         friction (and damping) removed during the step per degree of freedom (the structure of
         `v`; see `friction_work`) and the work done by driven boundaries [J]."""
 
+    def velocity_at(self, model: AbstractModel, q, v, a, t, h):
+        """The velocity at the position `q` (time `t`) given the velocity `v` the run carries
+        (what a save records): `v` itself for a scheme that carries the velocity at its
+        positions; [`jaxrod.ProjectedLeapfrog`][] carries the half step's."""
+        return v
+
     def step_limit(self, model):
         om = model.max_frequency()
         return jnp.where(om > 0, 2.0 / jnp.where(om > 0, om, 1.0), jnp.inf)
@@ -232,6 +238,7 @@ class AbstractFixedStep(AbstractIntegrator):
         s0 = self.start(model, q0, v0, options)
 
         def record(s):
+            s = eqx.tree_at(lambda r: r.v, s, self.velocity_at(model, s.q, s.v, s.a, s.t, h))
             rec = {
                 "stuck": s.stuck,
                 "dissipated": sum(jnp.sum(x) for x in jax.tree_util.tree_leaves(s.dissipated)),
@@ -282,7 +289,7 @@ class AbstractFixedStep(AbstractIntegrator):
             t_buckle=s.t_buckle,
             t_stop=s.stop_time(t1, n_save),
             q_final=s.q,
-            v_final=s.v,
+            v_final=self.velocity_at(model, s.q, s.v, s.a, s.t, h),
             result=self.result(model, s, h, check_step_limit),
             n_steps=s.steps,
         )

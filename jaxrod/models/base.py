@@ -27,6 +27,10 @@ class AbstractModel(eqx.Module):
     # whether a state that passes the stick test stays put under the sharp law's projected
     # step (true for the per-DOF prox; the 3D rod's contact keeps it from being exact)
     held_is_fixed: ClassVar[bool] = True
+    # the fixed-step scheme a run of this model uses by default (`jaxrod.integrators.default_for`):
+    # "verlet" (projected Verlet) or "leapfrog" (projected leapfrog: one friction pass per step,
+    # for models whose friction pass is most of a step)
+    scheme: ClassVar[str] = "verlet"
 
     @abc.abstractmethod
     def acceleration(self, q: Float[Array, "..."], t) -> Float[Array, "..."]:

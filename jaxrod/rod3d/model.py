@@ -37,7 +37,9 @@ class Rod3D(AbstractModel):
     """The discrete 3D rod in the channel. See the module docstring for every equation.
 
     A model like the others: it runs through [`jaxrod.simulate`][] with
-    [`jaxrod.ProjectedVerlet`][] (kick → friction prox → drift → kick → friction prox), in
+    [`jaxrod.ProjectedLeapfrog`][] (kick → friction prox → drift, its default `scheme`: the
+    friction pass is most of a step) or [`jaxrod.ProjectedVerlet`][] (kick → friction prox →
+    drift → kick → friction prox), in
     sweeps and under `jit`/`vmap`. Its coordinates are a [`Rod3DPosition`][], its velocities a
     [`Rod3DVelocity`][] (`model.initial_state(F)` gives both); the friction law is the
     integrator's ([`jaxrod.Coulomb`][], exact, or [`jaxrod.Tanh`][]).
@@ -84,6 +86,7 @@ class Rod3D(AbstractModel):
     """
 
     held_is_fixed: ClassVar[bool] = False  # a stuck rod can creep at the contact (issue [rod3d])
+    scheme: ClassVar[str] = "leapfrog"  # the friction pass is most of a step: one per step
 
     rod: RodChannel
     n_segments: int = eqx.field(static=True)

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import theory
 from .._results import RESULTS
-from ..integrators import ProjectedVerlet
+from ..integrators import default_for
 from ..integrators.base import RunOptions, save_grid
 from ..params import RodChannel
 from ..scene import dominant_mode_of, DEFAULT_SEGMENTS, Scene, default_nodes, make_perturbation
@@ -67,7 +67,9 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     """A member in three pure parts: `setup(params, index, base_key)` gives its model and its
     [`RunState`][jaxrod.integrators.base.RunState] at t = 0, the fixed-step engine advances it
     (`advance`, `finished`), `outputs(ok, model, run)` summarises it. Every model, 3D included."""
-    integrator = ProjectedVerlet(dt)
+    def integrator(model):  # the model's default scheme, as `Scene.integrator`
+        return default_for(model, dt)
+
     opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
     m, h = save_grid(spec.t1, N_SAVE, dt)
     # the 3D rod's limit is a power iteration (80 Hessian-vector products: 4 ms per member at
@@ -84,17 +86,17 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
                       grid_dt=grid_dt)
         model = scene.model()
         q0, v0 = scene.initial_state()
-        return ok, model, integrator.start(model, q0, v0, opts)
+        return ok, model, integrator(model).start(model, q0, v0, opts)
 
     def advance(model, run):
-        return integrator.advance(model, run, jnp.asarray(h, run.t.dtype), m, N_SAVE, opts)
+        return integrator(model).advance(model, run, jnp.asarray(h, run.t.dtype), m, N_SAVE, opts)
 
     def finished(run):
         return run.finished(N_SAVE)
 
     def outputs(ok, model, run):
         dom = dominant_mode_of(spec.model, run.q, spec.mode)
-        code = integrator.result(model, run, jnp.asarray(h, run.t.dtype), check_limit)
+        code = integrator(model).result(model, run, jnp.asarray(h, run.t.dtype), check_limit)
         result = jnp.where(ok & model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
         return {
             "buckled": run.buckled & (result == 0),
