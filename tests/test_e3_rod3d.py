@@ -42,6 +42,30 @@ def test_bisect_gives_up_after_max_runs():
     assert len(calls) == 6
 
 
+def test_bisect_gives_up_when_every_amplitude_down_to_a_millionth_buckles():
+    # buckles at any v > 0 but not at 0 (a rod the load buckles from its straight state, 3D at
+    # 60 N with 60 segments): the downward doubling stops at guess·1e-6 instead of reaching 0
+    label, calls = _counting(0.0)
+    assert _bisect(label, 1.0, 0.04, 0.01, 40) is None
+    assert min(calls) == pytest.approx(1e-6) and all(v > 0 for v in calls)
+
+
+def test_runs_file_of_older_columns_is_read_as_verlet_and_migrated(tmp_path):
+    from jaxrod.experiments.e3_rod3d import RUN_COLUMNS, _append, _runs_of
+
+    path = tmp_path / "runs.csv"
+    old = [c for c in RUN_COLUMNS if c != "scheme"]
+    path.write_text(",".join(old) + "\n" + "5.0,60,0.3,surface,pinned,0.001,0.4,1e-05,0.026,1,2.0\n")
+    settings = (60, 0.3, 0.4, 1e-5, "surface", "pinned", 1e-3)
+    assert _runs_of(str(path), *settings, "verlet") == {(5.0, 0.026): True}
+    assert _runs_of(str(path), *settings, "leapfrog") == {}
+    _append(str(path), dict(dF=5.0, n_segments=60, mu=0.3, friction_at="surface", ends="pinned", sink=1e-3, t1=0.4,
+                            dt=1e-5, scheme="leapfrog", v0=0.025, buckled=0, seconds=1.0))
+    assert path.read_text().splitlines()[0] == ",".join(RUN_COLUMNS)
+    assert _runs_of(str(path), *settings, "verlet") == {(5.0, 0.026): True}
+    assert _runs_of(str(path), *settings, "leapfrog") == {(5.0, 0.025): False}
+
+
 @pytest.mark.slow
 def test_boundary_3d_replays_its_runs(tmp_path):
     from jaxrod.experiments.e3_rod3d import boundary_3d

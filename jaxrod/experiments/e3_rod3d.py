@@ -35,23 +35,28 @@ from ..stability_map import fit_power_law
 __all__ = ["boundary_3d", "label_3d", "plot_boundary_3d", "RUN_COLUMNS"]
 
 DT_RTOL = 1e-3
-RUN_COLUMNS = ["dF", "n_segments", "mu", "friction_at", "ends", "sink", "t1", "dt", "v0", "buckled", "seconds"]
+RUN_COLUMNS = ["dF", "n_segments", "mu", "friction_at", "ends", "sink", "t1", "dt", "scheme", "v0", "buckled", "seconds"]
+SCHEMES = ("leapfrog", "verlet")  # `jaxrod.ProjectedLeapfrog` (the 3D rod's default), `jaxrod.ProjectedVerlet`
 SINK = 1e-3  # the 3D rod's default contact: it sinks 1e-3·R into the wall under its weight
 
 
-def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK):
+def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, scheme="leapfrog"):
     """The jitted label (ΔF [N], v₀ [m/s]) → buckled of the 3D rod of `n` segments under the
     dead load F⁰₆ + ΔF with a sine mode-6 lateral velocity v₀: the run of
     [`jaxrod.boundary.crossing_state`][] (stops when it buckles or sticks, at most `t1` [s],
     step `dt` [s]) — with the defaults the same run as the scene `Scene(kind="rod3d")`, with
     `friction_at` and `ends` passed to [`jaxrod.rod3d.Rod3D`][], the wall's Hertz constant set so
-    that the rod sinks `sink`·R into it under its weight (`Rod3D`'s default: 1e-3)."""
-    from ..integrators import ProjectedLeapfrog
+    that the rod sinks `sink`·R into it under its weight (`Rod3D`'s default: 1e-3), `scheme`
+    `"leapfrog"` ([`jaxrod.ProjectedLeapfrog`][], the 3D rod's default) or `"verlet"`
+    ([`jaxrod.ProjectedVerlet`][])."""
+    from ..integrators import ProjectedLeapfrog, ProjectedVerlet
     from ..integrators.base import RunOptions
     from ..rod3d import Rod3D
     from ..simulate import simulate
 
-    integrator = ProjectedLeapfrog(dt)  # the 3D rod's default scheme (`Rod3D.scheme`)
+    if scheme not in SCHEMES:
+        raise ValueError(f"scheme = {scheme!r} is invalid: expected one of {SCHEMES}.")
+    integrator = (ProjectedLeapfrog if scheme == "leapfrog" else ProjectedVerlet)(dt)
 
     @jax.jit
     def buckled(dF, v0):
@@ -64,10 +69,11 @@ def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK):
     return buckled
 
 
-def _runs_of(path, n, mu, t1, dt, friction_at, ends, sink):
+def _runs_of(path, n, mu, t1, dt, friction_at, ends, sink, scheme):
     """Finished runs {(ΔF, v₀): buckled} of the same settings from the CSV at `path` (a step
     within `DT_RTOL` of `dt` counts as the same: a call takes the smallest step of its loads,
-    and the step limit moves by ~1e-5 relative between loads)."""
+    and the step limit moves by ~1e-5 relative between loads; a row without a scheme was run
+    with projected Verlet, the only scheme before `scheme` was recorded)."""
     done = {}
     if path and os.path.exists(path):
         with open(path) as fh:
@@ -75,7 +81,8 @@ def _runs_of(path, n, mu, t1, dt, friction_at, ends, sink):
                 same = (int(r["n_segments"]) == n and math.isclose(float(r["mu"]), mu)
                         and r["friction_at"] == friction_at and r["ends"] == ends
                         and math.isclose(float(r["sink"]), sink)
-                        and math.isclose(float(r["t1"]), t1) and math.isclose(float(r["dt"]), dt, rel_tol=DT_RTOL))
+                        and math.isclose(float(r["t1"]), t1) and math.isclose(float(r["dt"]), dt, rel_tol=DT_RTOL)
+                        and (r.get("scheme") or "verlet") == scheme)
                 if same:
                     done[(float(r["dF"]), float(r["v0"]))] = r["buckled"] == "1"
     return done
@@ -85,6 +92,15 @@ def _append(path, row):
     if not path:
         return
     new = not os.path.exists(path)
+    if not new:  # a file of older columns (no scheme: projected Verlet) gets today's, once
+        with open(path, newline="") as fh:
+            old = list(csv.DictReader(fh))
+            header = list(old[0].keys()) if old else RUN_COLUMNS
+        if header != RUN_COLUMNS:
+            with open(path, "w", newline="") as fh:
+                w = csv.DictWriter(fh, RUN_COLUMNS)
+                w.writeheader()
+                w.writerows({**{"scheme": "verlet"}, **{k: v for k, v in r.items() if v is not None}} for r in old)
     os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
     with open(path, "a", newline="") as fh:
         w = csv.DictWriter(fh, RUN_COLUMNS)
@@ -99,18 +115,20 @@ def _bisect(label, guess, width, rtol, max_runs):
     differ, then bisected geometrically until hi/lo − 1 ≤ `rtol`.
 
     **Returns:** `(lo, hi)` (largest stable, smallest buckled amplitude tested) or `None` when
-    `max_runs` labels did not bracket it."""
+    `max_runs` labels did not bracket it, or every amplitude down to guess·1e-6 buckled (up to
+    guess·1e6 held)."""
     lo, hi = guess * (1 - width), guess * (1 + width)
     b_lo, b_hi = label(lo), label(hi)
     runs, step = 2, 1 + 2 * width
+    floor, ceiling = guess * 1e-6, guess * 1e6  # the doubling step would otherwise reach 0 or ∞
     while b_lo == b_hi:
-        if runs >= max_runs:
+        if runs >= max_runs or (b_lo and lo <= floor) or (not b_hi and hi >= ceiling):
             return None
         if b_lo:  # both buckled: the boundary lies below
-            hi, lo = lo, lo / step
+            hi, lo = lo, max(lo / step, floor)
             b_lo = label(lo)
         else:
-            lo, hi = hi, hi * step
+            lo, hi = hi, min(hi * step, ceiling)
             b_hi = label(hi)
         runs += 1
         step *= step
@@ -125,7 +143,7 @@ def _bisect(label, guess, width, rtol, max_runs):
 
 
 def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=16, runs_csv=None,
-                friction_at="surface", ends="pinned", sink=SINK, progress=True):
+                friction_at="surface", ends="pinned", sink=SINK, scheme="leapfrog", progress=True):
     """v₀*(ΔF) [m/s] of the 3D rod of `n` segments at each load `dFs` [N] above F⁰₆ (label
     bisection to `rtol` relative bracket width), next to the field model's converged boundary
     search, and the power laws v₀* ∝ ΔF^p fitted to each.
@@ -133,7 +151,8 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     **Arguments:** `t1` the horizon [s] (a run that neither sticks nor buckles by then is
     stable), `width` the half-width of the first bracket (relative), `max_runs` per load,
     `runs_csv` the file every finished run is appended to and replayed from, `friction_at` and
-    `ends` passed to [`jaxrod.rod3d.Rod3D`][], `sink` the wall's compliance (see `label_3d`).
+    `ends` passed to [`jaxrod.rod3d.Rod3D`][], `sink` the wall's compliance and `scheme` the
+    integrator (see `label_3d`).
 
     **Returns:** dict with `points` (per load: `dF`, `field`, `rod3d`, `bracket`, `runs`,
     `seconds`), `exponent_rod3d` ± `exponent_rod3d_stderr`, `exponent_field` ± its stderr (the
@@ -146,8 +165,8 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     # one step for every load (the step limit barely moves with the load): one compiled run
     dt = min(Scene(rod, float(dF), SineVelocity(1e-3), kind="rod3d", n=n).step() for dF in dFs)
 
-    buckled = label_3d(rod, n, dt, t1, friction_at, ends, sink)
-    done = _runs_of(runs_csv, n, mu, t1, dt, friction_at, ends, sink)
+    buckled = label_3d(rod, n, dt, t1, friction_at, ends, sink, scheme)
+    done = _runs_of(runs_csv, n, mu, t1, dt, friction_at, ends, sink, scheme)
     points = []
     for dF in dFs:
         t0 = time.perf_counter()
@@ -163,7 +182,7 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
                 sec = time.perf_counter() - t
                 count[1] += sec
                 _append(runs_csv, dict(dF=dF, n_segments=n, mu=mu, friction_at=friction_at, ends=ends, sink=sink, t1=t1,
-                                       dt=dt, v0=float(v0),
+                                       dt=dt, scheme=scheme, v0=float(v0),
                                        buckled=int(done[key]), seconds=round(sec, 2)))
                 if progress:
                     print(f"  ΔF = {dF:g} N, v0 = {1e3 * v0:.3f} mm/s: {'buckled' if done[key] else 'stable'}"
@@ -184,7 +203,7 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     pf, sef, cf = fit_power_law([p["dF"] for p in points], [p["field"] for p in points])
     return dict(points=points, exponent_rod3d=p3, exponent_rod3d_stderr=se3, prefactor_rod3d=c3,
                 exponent_field=pf, exponent_field_stderr=sef, prefactor_field=cf, exponent_theory=-0.5,
-                n_segments=n, mu=mu, friction_at=friction_at, ends=ends, sink=sink, t1=t1, dt=dt, rtol=rtol, F0=float(theory.reference_load(rod)))
+                n_segments=n, mu=mu, friction_at=friction_at, ends=ends, sink=sink, scheme=scheme, t1=t1, dt=dt, rtol=rtol, F0=float(theory.reference_load(rod)))
 
 
 def plot_boundary_3d(res, path=None):

@@ -9,7 +9,9 @@ last call with every load writes the summary from the recorded runs without runn
     python results/paper/e3/rod3d_boundary.py --n 120 --dF 10 20 40 60 &
     wait; python results/paper/e3/rod3d_boundary.py --n 120 --dF 0.5 1 2 5 10 20 40 60
 
-Writes `rod3d_boundary_n{n}.json` (`_axis` added with `--friction-at axis`) (points, both exponents, settings), `.csv` (one row per load,
+Writes `rod3d_boundary_n{n}.json` (`_axis` added with `--friction-at axis`, `_leapfrog` with the
+default `--scheme leapfrog`: the files without it hold the runs of projected Verlet, the 3D rod's
+scheme until the eleventh session) (points, both exponents, settings), `.csv` (one row per load,
 plain numbers) and `.png`.
 """
 
@@ -39,12 +41,15 @@ def main():
                     help="friction at the contact point (default) or at the centre line (no rolling)")
     ap.add_argument("--sink", type=float, default=1e-3,
                     help="the wall's compliance: the rod sinks sink·R into it under its weight")
+    ap.add_argument("--scheme", default="leapfrog", choices=("leapfrog", "verlet"),
+                    help="the integrator: projected leapfrog (the 3D rod's default) or projected Verlet")
     ap.add_argument("--dir", default=HERE, help="folder of the runs file and the outputs")
     args = ap.parse_args()
     res = boundary_3d(args.dF, n=args.n, rtol=args.rtol, t1=args.t1,
-                      friction_at=args.friction_at, sink=args.sink, runs_csv=os.path.join(args.dir, "rod3d_runs.csv"))
+                      friction_at=args.friction_at, sink=args.sink, scheme=args.scheme, runs_csv=os.path.join(args.dir, "rod3d_runs.csv"))
     stem = os.path.join(args.dir, f"rod3d_boundary_n{args.n}" + ("" if args.friction_at == "surface" else "_axis")
-                        + ("" if args.sink == 1e-3 else f"_sink{args.sink:g}"))
+                        + ("" if args.sink == 1e-3 else f"_sink{args.sink:g}")
+                        + ("_leapfrog" if args.scheme == "leapfrog" else ""))
     with open(stem + ".json", "w") as fh:
         json.dump(res, fh, indent=1)
     write_csv(stem + ".csv", [dict(dF=p["dF"], n_segments=args.n, mu=res["mu"], t1=res["t1"], dt=res["dt"],
