@@ -9,7 +9,9 @@ step limit through `jaxrod.simulate` (`experiments.rod3d.run`), min over repeats
 compilation:
 
 - single rod, the default converged friction pass (`friction_tol` 1e-4) and one sweep
-  (`friction_sweeps=1`);
+  (`friction_sweeps=1`), each tree with its default scheme (since the eleventh session the 3D
+  rod's is projected leapfrog, one friction pass per step; earlier trees run projected Verlet,
+  two);
 - a `jax.vmap` batch of 64 rods (amplitudes 5–40 mm/s; a quarter of the steps), per rod;
 - the same 64 rods through the common sweep, `jaxrod.sweep` (`sweep_worker`: each tree's default
   scheduling and lanes, one XLA device per core as `jaxrod map` sets it; members stop when they
@@ -95,7 +97,7 @@ def loop_kernels(compiled_text: str) -> dict:
 
 
 def sweep_use(model, F, amplitudes, dt, steps):
-    """Friction sweeps per pass in a vmapped batch (the second pass of every step, `v.sweeps`):
+    """Friction sweeps per pass in a vmapped batch (the last pass of every step, `v.sweeps`):
     the mean over rods and steps, and the mean over steps of the batch's largest (a batched
     while loop runs until its slowest rod has converged). (0, 0) where the revision does not
     report sweeps."""
@@ -105,16 +107,22 @@ def sweep_use(model, F, amplitudes, dt, steps):
     from jaxrod.integrators import ProjectedVerlet
     from jaxrod.rod3d import sine_velocity
 
-    integ = ProjectedVerlet(float(dt))
+    try:  # each tree's default scheme (projected leapfrog for the 3D rod since the eleventh session)
+        from jaxrod.integrators import default_for
+
+        integ = default_for(model, float(dt))
+    except ImportError:
+        integ = ProjectedVerlet(float(dt))
 
     def one(a):
         q, v = model.initial_state(F, lateral_velocity=sine_velocity(model, a))
 
-        def body(c, _):
-            q, v, acc, _ = integ.step(model, *c, 0.0, dt)
+        def body(c, t):
+            q, v, acc, _ = integ.step(model, *c, t, dt)
             return (q, v, acc), v.sweeps
 
-        return jax.lax.scan(body, (q, v, model.accelerations(q, v, 0.0)), None, length=steps)[1]
+        ts = dt * jnp.arange(steps)
+        return jax.lax.scan(body, (q, v, model.accelerations(q, v, 0.0)), ts)[1]
 
     if not hasattr(model.initial_state(F)[1], "sweeps"):
         return 0.0, 0.0
