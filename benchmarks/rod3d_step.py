@@ -55,10 +55,12 @@ sys.path.insert(0, HERE)
 
 
 def loop_kernels(compiled_text: str) -> dict:
-    """Kernels one pass of each loop runs, from the optimised HLO: for the step loop (the loop
-    whose body holds the two friction loops) and one friction sweep, the count of its body's
+    """Kernels one pass of each loop runs, from the optimised HLO: for the step loop and one
+    friction sweep, the count of its body's
     instructions that execute (fusions and unfused ops; not parameters, constants, tuples,
-    bitcasts). Zero where the compiled step has no friction loop (one sweep)."""
+    bitcasts). Zero where the compiled step has no friction loop (one sweep). The step loop is the
+    loop whose body holds the friction loops and nothing else: one (projected leapfrog) or two
+    (projected Verlet)."""
     import re
 
     comps, cur = {}, None
@@ -87,7 +89,7 @@ def loop_kernels(compiled_text: str) -> dict:
     inner = {b: [c for c, parent in loops.items() if parent == b] for b in loops}
     out = dict(step_kernels=0, sweep_kernels=0)
     for b in loops:
-        if len(inner[b]) == 2 and all(not inner[c] for c in inner[b]):
+        if len(inner[b]) in (1, 2) and all(not inner[c] for c in inner[b]):  # leapfrog: 1, Verlet: 2
             out["step_kernels"] = sum(o not in skip for o in ops(b))
             out["sweep_kernels"] = sum(o not in skip for o in ops(inner[b][0]))
     if not out["step_kernels"]:  # one sweep: the step is the innermost loop with a friction pass inline

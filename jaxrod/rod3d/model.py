@@ -246,7 +246,7 @@ class Rod3D(AbstractModel):
     def kinetic_energy(self, v: Rod3DVelocity) -> Float[Array, ""]:
         return sum(self.kinetic_terms(v.v, v.w).values())
 
-    # -- the model interface: the pieces of a projected Verlet step ----------------------------
+    # -- the model interface: the pieces of a projected step (leapfrog or Verlet) --------------
     def acceleration(self, q: Rod3DPosition, t=None) -> Rod3DForces:
         """The conservative forces at `q` (those of a rod at rest)."""
         return self.accelerations(q, at_rest(q), t)

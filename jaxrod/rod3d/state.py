@@ -45,7 +45,7 @@ class Rod3DForces(eqx.Module):
     `f` [N] (elastic, contact, gravity, body, damping), material torques `tau` [N·m], wall
     normal forces `N` [N], the non-conservative (damping) part `fd` of the node forces [N], and
     `table`, the friction pass's fields of every contact there
-    (`jaxrod.rod3d.contact.friction_table`: both passes of a step are at one position)."""
+    (`jaxrod.rod3d.contact.friction_table`: computed once per position for every pass there)."""
 
     f: Float[Array, "n1 3"]
     tau: Float[Array, "n 3"]
