@@ -359,9 +359,13 @@ def main():
     ap.add_argument("--batch-steps", type=int, default=None, help="steps of the batch run (default 1000)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--periods", type=float, default=None, help="agreement horizon in first periods (0.25)")
-    ap.add_argument("--out", default="benchmarks/results/rod3d_vs_pyelastica.csv")
+    ap.add_argument("--out", default=None, help="CSV (default benchmarks/results/rod3d_vs_pyelastica.csv, "
+                    "with _n<sizes> added for other sizes than 50 100, so that a --n 500 run keeps the default's)")
     a = ap.parse_args()
     ns = a.n or ([50] if a.quick else [50, 100])
+    if a.out is None:
+        tag = "" if ns == [50, 100] else "_n" + "_".join(map(str, ns))
+        a.out = f"benchmarks/results/rod3d_vs_pyelastica{tag}.csv"
     steps = a.steps or (4000 if a.quick else 20000)
     batch_steps = a.batch_steps or (200 if a.quick else 1000)
     periods = a.periods or (0.1 if a.quick else 0.25)
