@@ -88,10 +88,14 @@ def loop_kernels(compiled_text: str) -> dict:
             loops[b] = caller[loops[b]]
     inner = {b: [c for c, parent in loops.items() if parent == b] for b in loops}
     out = dict(step_kernels=0, sweep_kernels=0)
+    count = lambda b: sum(o not in skip for o in ops(b))
     for b in loops:
-        if len(inner[b]) in (1, 2) and all(not inner[c] for c in inner[b]):  # leapfrog: 1, Verlet: 2
-            out["step_kernels"] = sum(o not in skip for o in ops(b))
-            out["sweep_kernels"] = sum(o not in skip for o in ops(inner[b][0]))
+        # Verlet: two friction loops; leapfrog: one, smaller than the step around it (a one-sweep
+        # step is itself a leaf loop, inside the saves' loop, which is smaller than it)
+        if all(not inner[c] for c in inner[b]) and (
+                len(inner[b]) == 2 or (len(inner[b]) == 1 and count(inner[b][0]) < count(b))):
+            out["step_kernels"] = count(b)
+            out["sweep_kernels"] = count(inner[b][0])
     if not out["step_kernels"]:  # one sweep: the step is the innermost loop with a friction pass inline
         leaf = [b for b in loops if not inner[b]]
         out["step_kernels"] = max(sum(o not in skip for o in ops(b)) for b in leaf)
