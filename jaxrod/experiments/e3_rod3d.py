@@ -36,7 +36,6 @@ __all__ = ["boundary_3d", "label_3d", "plot_boundary_3d", "RUN_COLUMNS"]
 
 DT_RTOL = 1e-3
 RUN_COLUMNS = ["dF", "n_segments", "mu", "friction_at", "ends", "sink", "t1", "dt", "scheme", "v0", "buckled", "seconds"]
-SCHEMES = ("leapfrog", "verlet")  # `jaxrod.ProjectedLeapfrog` (the 3D rod's default), `jaxrod.ProjectedVerlet`
 SINK = 1e-3  # the 3D rod's default contact: it sinks 1e-3·R into the wall under its weight
 
 
@@ -49,14 +48,14 @@ def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, sc
     that the rod sinks `sink`·R into it under its weight (`Rod3D`'s default: 1e-3), `scheme`
     `"leapfrog"` ([`jaxrod.ProjectedLeapfrog`][], the 3D rod's default) or `"verlet"`
     ([`jaxrod.ProjectedVerlet`][])."""
-    from ..integrators import ProjectedLeapfrog, ProjectedVerlet
+    from ..integrators import SCHEMES
     from ..integrators.base import RunOptions
     from ..rod3d import Rod3D
     from ..simulate import simulate
 
     if scheme not in SCHEMES:
-        raise ValueError(f"scheme = {scheme!r} is invalid: expected one of {SCHEMES}.")
-    integrator = (ProjectedLeapfrog if scheme == "leapfrog" else ProjectedVerlet)(dt)
+        raise ValueError(f"scheme = {scheme!r} is invalid: expected one of {tuple(SCHEMES)}.")
+    integrator = SCHEMES[scheme](dt)
 
     @jax.jit
     def buckled(dF, v0):

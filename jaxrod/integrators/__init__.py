@@ -9,8 +9,12 @@ from .verlet import ProjectedVerlet as ProjectedVerlet
 from .leapfrog import ProjectedLeapfrog as ProjectedLeapfrog
 
 
+SCHEMES = {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet}
+"""The projected schemes by the name a model's `scheme` gives."""
+
+
 def default_for(model, dt: float, **kwargs) -> AbstractFixedStep:
     """The fixed-step integrator a run of `model` uses by default, step `dt` [s] (`kwargs`, e.g.
-    `friction`, go to it): the model's `scheme`, [`jaxrod.ProjectedLeapfrog`][] (`"leapfrog"`,
-    the 3D rod) or [`jaxrod.ProjectedVerlet`][] (`"verlet"`, the reduced models)."""
-    return {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet}[model.scheme](dt, **kwargs)
+    `friction`, go to it): `SCHEMES[model.scheme]`, [`jaxrod.ProjectedLeapfrog`][] for the 3D rod,
+    [`jaxrod.ProjectedVerlet`][] for the reduced models."""
+    return SCHEMES[model.scheme](dt, **kwargs)

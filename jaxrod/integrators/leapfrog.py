@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from ..friction import AbstractFriction, Coulomb
-from .base import AbstractFixedStep
+from .projected import AbstractProjected
 
 __all__ = ["ProjectedLeapfrog"]
 
 
-class ProjectedLeapfrog(AbstractFixedStep):
+class ProjectedLeapfrog(AbstractProjected):
     """Leapfrog with the friction impulse applied as an exact proximal step after each kick:
     kick → prox → drift, one friction pass per step.
 
@@ -40,17 +38,6 @@ class ProjectedLeapfrog(AbstractFixedStep):
       every save time on a step.
     - `friction`: the friction law (default [`jaxrod.Coulomb`][]).
     """
-
-    dt: float = eqx.field(static=True)
-    friction: AbstractFriction = Coulomb()
-
-    def __check_init__(self):
-        if not (isinstance(self.dt, (int, float)) and self.dt > 0):
-            raise ValueError(f"ProjectedLeapfrog.dt = {self.dt!r} is invalid: expected a float > 0.")
-
-    def held_is_fixed(self, model):
-        # with the sharp law a held DOF has exactly zero velocity after the prox
-        return model.held_is_fixed and isinstance(self.friction, Coulomb)
 
     def step(self, model, q, v, a, t, h):
         hk = jnp.where(t > 0, h, 0.5 * h)  # the first step starts from the velocity at t = 0

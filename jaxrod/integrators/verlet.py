@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from ..friction import AbstractFriction, Coulomb
-from .base import AbstractFixedStep
+from .projected import AbstractProjected
 
 __all__ = ["ProjectedVerlet"]
 
 
-class ProjectedVerlet(AbstractFixedStep):
+class ProjectedVerlet(AbstractProjected):
     """Velocity Verlet with the friction impulse applied as an exact proximal step after each
     half kick: kick → prox → drift → kick → prox.
 
@@ -30,17 +28,6 @@ class ProjectedVerlet(AbstractFixedStep):
     - `friction`: the friction law (default [`jaxrod.Coulomb`][]); with [`jaxrod.Tanh`][] the
       scheme is plain explicit Verlet on the smoothed law (needs `dt·f/ε ≲ 2`).
     """
-
-    dt: float = eqx.field(static=True)
-    friction: AbstractFriction = Coulomb()
-
-    def __check_init__(self):
-        if not (isinstance(self.dt, (int, float)) and self.dt > 0):
-            raise ValueError(f"ProjectedVerlet.dt = {self.dt!r} is invalid: expected a float > 0.")
-
-    def held_is_fixed(self, model):
-        # with the sharp law a held DOF has exactly zero velocity after the prox
-        return model.held_is_fixed and isinstance(self.friction, Coulomb)
 
     def step(self, model, q, v, a, t, h):
         half = 0.5 * h

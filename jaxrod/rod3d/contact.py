@@ -55,8 +55,9 @@ def friction_table(model, x, Q, N):
     friction bounds per unit time μ_s N and μ_d N [N] and whether it is active (N > 0 and
     movable). Every pass at a position uses them (projected leapfrog: the one pass of the next
     step and the pass of a save; projected Verlet: the second pass of a step and the first of the
-    next), so `Rod3D.accelerations` computes this once per position and the forces carry it. An array (len(FIELDS), M, 2): field, entry k, colour c for node 2k + c (padded
-    nodes inert). The pass itself is `friction_pass`."""
+    next), so `Rod3D.accelerations` computes this once per position and the forces carry it. An
+    array (len(FIELDS), M, 2): field, entry k, colour c for node 2k + c (padded nodes inert).
+    The pass itself is `friction_pass`."""
     dtype = x.dtype
     M = colours(model.n)
     if not model.channel:  # no wall, no contact: an inert table

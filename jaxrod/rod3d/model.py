@@ -37,12 +37,9 @@ class Rod3D(AbstractModel):
     """The discrete 3D rod in the channel. See the module docstring for every equation.
 
     A model like the others: it runs through [`jaxrod.simulate`][] with
-    [`jaxrod.ProjectedLeapfrog`][] (kick → friction prox → drift, its default `scheme`: the
-    friction pass is most of a step) or [`jaxrod.ProjectedVerlet`][] (kick → friction prox →
-    drift → kick → friction prox), in
-    sweeps and under `jit`/`vmap`. Its coordinates are a [`Rod3DPosition`][], its velocities a
-    [`Rod3DVelocity`][] (`model.initial_state(F)` gives both); the friction law is the
-    integrator's ([`jaxrod.Coulomb`][], exact, or [`jaxrod.Tanh`][]).
+    [`jaxrod.ProjectedLeapfrog`][] (its default `scheme`) or [`jaxrod.ProjectedVerlet`][] and their
+    friction law ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]), in sweeps and under `jit`/`vmap`. Its
+    coordinates are a [`Rod3DPosition`][], its velocities a [`Rod3DVelocity`][] (both: `initial_state`).
 
     **Arguments:**
 
