@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from .._numerics import computed_once
 from .._trig import atan2, sincos
 
 __all__ = ["unpack", "pack", "unpack_matrix", "pack_matrix", "dot", "cross", "add", "sub", "scale",
@@ -76,6 +77,7 @@ def rotate(phi, A):
     sin, cos = sincos(ths)
     a = jnp.where(small, 1.0 - th2 / 6.0, sin / ths)
     b = jnp.where(small, 0.5 - th2 / 24.0, (1.0 - cos) / ths**2)
+    a, b = computed_once((a, b), th2)  # read by all nine entries
     cols = []
     for c in range(3):
         col = (A[0][c], A[1][c], A[2][c])

@@ -268,7 +268,11 @@ class Rod3D(AbstractModel):
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
-        Q = computed_once(sum(c3.rotate(c3.scale(-h, c3.unpack(v.w)), c3.unpack_matrix(q.Q)), ()), q.Q[:, 0, 0])
+        W = c3.unpack(v.w)
+        # −hω as arrays of their own: a step h that is not a compile-time constant (the engine's
+        # zero step of a finished run) otherwise costs 7 µs of the 100 at 500 segments
+        phi = computed_once(c3.scale(-h, W), W[0])
+        Q = computed_once(sum(c3.rotate(phi, c3.unpack_matrix(q.Q)), ()), q.Q[:, 0, 0])
         return Rod3DPosition(q.x + h * v.v, c3.pack_matrix((Q[0:3], Q[3:6], Q[6:9])))
 
     def friction_bounds(self, t=None):
