@@ -173,7 +173,7 @@ class _NoFrictionPass(Rod3D):
     in contact (N = 0), so `friction_step` returns its input and this is the same run; it
     measures what that pass costs when it has nothing to do."""
 
-    def friction_step(self, friction, table, v, w, stuck, force, h):
+    def friction_step(self, friction, table, Q, v, w, stuck, force, h):
         return v, w, stuck, force, jnp.zeros((), v.dtype), jnp.zeros((), v.dtype)
 
 

@@ -11,12 +11,16 @@ import numpy as np
 from .._numerics import computed_once, safe_hypot
 from . import components as c3
 from .energy import _penetration
+from .state import held_pattern
 
 __all__ = ["node_weights", "FIELDS", "friction_table", "friction_pass"]
 
-# the friction pass's fields of each contact, rows of `friction_table` (components k = 0, 1, 2)
-FIELDS = (("cl", "cr", "W11", "W12", "W22", "bound_s", "bound_d", "active")
-          + tuple(f"{name}{k}" for name in ("t2", "fm", "g1l", "g2l", "g1r", "g2r", "J") for k in range(3)))
+# the friction pass's fields of each contact, rows of `friction_table`: the outward radius
+# e_r = (0, e1, e2), the tangent inverse mass W, the bounds per unit time, whether it is active,
+# and for its left (l) and right (r) segment the arms δ_a = d₃·ûₐ and the vector D of its spin
+# along the segment's axis (`friction_table`)
+FIELDS = ("e1", "e2", "W11", "W12", "W22", "bound_s", "bound_d", "active", "dl1", "dl2", "dr1", "dr2",
+          "Dlx", "Dly", "Dlz", "Drx", "Dry", "Drz")
 
 
 def _arm(model, dtype):
@@ -48,84 +52,99 @@ def colours(n: int) -> int:
     return (n + 2) // 2
 
 
+def _node_constants(model, dtype):
+    """What the friction pass needs of each node that does not depend on the position, as
+    arrays (n + 1,): the inverse mass of its free translations `fm` (x, y, z) [1/kg], and for its
+    left and right segment ρ = c r (its share of the segment's spin times the arm) [m] and
+    k = ρ A (A = 1/J_⊥, the segment's inverse inertia about a transverse axis, 0 where its
+    rotation is held) [1/(kg·m)], and B − A (B = 1/J_∥ about its axis, 0 where its spin is held)
+    [1/(kg·m²)]."""
+    held_n, held_s = held_pattern(model)
+    if not np.array_equal(held_s[:, 0], held_s[:, 1]):
+        raise ValueError("Rod3D.held: the two transverse spin components of a segment are held together.")
+    inv_m = 1.0 / model.mass.astype(dtype)
+    fm = tuple(jnp.asarray(~held_n[:, k], dtype) * inv_m for k in range(3))
+    r = _arm(model, dtype)
+    J = model.inertia.astype(dtype)
+    A = jnp.asarray(~held_s[:, 0], dtype) / J[0]
+    BA = jnp.asarray(~held_s[:, 2], dtype) / J[2] - A
+    cl, cr = node_weights(model)
+    sides = {}
+    for side, c in (("l", cl), ("r", cr)):
+        rho = c.astype(dtype) * r
+        sides[side] = (rho, rho * _shift(A, "left" if side == "l" else "right"),
+                       _shift(BA, "left" if side == "l" else "right"))
+    return fm, sides
+
+
 def friction_table(model, x, Q, N):
-    """The fields of the friction pass at the position (x, Q) under the normal forces `N` [N]:
-    for each contact, the tangent direction t₂ = x̂ × e_r, the arms gₐ of its impulse in its two
-    segments' frames, the shares c of their spin, the tangent inverse mass W [1/kg], the
-    friction bounds per unit time μ_s N and μ_d N [N] and whether it is active (N > 0 and
-    movable). Every pass at a position uses them (projected leapfrog: the one pass of the next
-    step and the pass of a save; projected Verlet: the second pass of a step and the first of the
-    next), so `Rod3D.accelerations` computes this once per position and the forces carry it. An
-    array (len(FIELDS), M, 2): field, entry k, colour c for node 2k + c (padded nodes inert).
-    The pass itself is `friction_pass`."""
+    """The fields of the friction pass at the position (x, Q) under the normal forces `N` [N]
+    (`FIELDS`), for each contact: its outward radius e_r = (0, e₁, e₂) (the tangents are t₁ = x̂
+    and t₂ = x̂ × e_r); the tangent inverse mass W [1/kg]; the friction bounds per unit time
+    μ_s N and μ_d N [N]; whether it is active (N > 0 and movable); and for each of its two
+    segments the arms δₐ = d₃·ûₐ of the unit torques û₁ = (0, e₂, −e₁), û₂ = x̂ about the
+    segment's axis d₃, and D = c r (B − A) d₃ [1/(kg·m)] (`friction_pass` gives every symbol).
+    Every pass at a position uses them (projected leapfrog: the one pass of the next step and
+    the pass of a save; projected Verlet: the second pass of a step and the first of the next),
+    so `Rod3D.accelerations` computes this once per position and the forces carry it. An array
+    (len(FIELDS), 2, M): field, colour c, entry k for node 2k + c (padded nodes inert)."""
     dtype = x.dtype
     M = colours(model.n)
     if not model.channel:  # no wall, no contact: an inert table
-        return jnp.zeros((len(FIELDS), M, 2), dtype)
+        return jnp.zeros((len(FIELDS), 2, M), dtype)
     # a held node still touches the wall: its translation is prescribed (the support takes the
     # friction force) but the friction at its contact point still acts on its segments' spin, so
     # the end of the rod cannot roll freely (without it the interior rolls sideways as one body,
     # the end segments tilting, and a loaded rod buckles through that roll: issue [rod3d])
-    held_n, held_s = model.held()
-    free_n = c3.unpack((~held_n).astype(dtype))
-    _, e_r = _penetration(model, c3.unpack(x))
-    r = _arm(model, dtype)
-    zero = jnp.zeros_like(e_r[0])
-    t1, t2 = (zero + 1.0, zero, zero), (zero, -e_r[2], e_r[1])  # x̂ and x̂ × e_r
-    u1, u2 = c3.scale(-r, t2), c3.scale(r, t1)  # r_c × t_a
-    cl, cr = node_weights(model)
-    Jf = (1.0 / model.inertia)[None, :] * (~held_s).astype(dtype)  # held spin components do not turn
-    m = model.mass
-    Qr = c3.unpack_matrix(Q)
-    # each node's two segments: share c, inverse inertia and the arms gₐ in that segment's frame
-    # (zero where there is no segment)
-    sides = []
-    for side, c in (("left", cl), ("right", cr)):
-        Qs = tuple(tuple(_shift(q, side) for q in row) for row in Qr)
-        sides.append((c, c3.unpack(_shift(Jf, side)), c3.matvec(Qs, u1), c3.matvec(Qs, u2)))
-    W11 = free_n[0] / m
-    W22 = (free_n[1] * e_r[2] ** 2 + free_n[2] * e_r[1] ** 2) / m
+    fm, sides = _node_constants(model, dtype)
+    _, (_, e1, e2) = _penetration(model, c3.unpack(x))
+    d3 = c3.unpack(Q[:, 2, :])  # each segment's axis in the lab frame
+    W11 = fm[0]
+    W22 = fm[1] * e2**2 + fm[2] * e1**2
     W12 = jnp.zeros_like(W11)
-    for c, Js, g1, g2 in sides:
-        W11 = W11 + c**2 * c3.dot(Js, (g1[0] * g1[0], g1[1] * g1[1], g1[2] * g1[2]))
-        W22 = W22 + c**2 * c3.dot(Js, (g2[0] * g2[0], g2[1] * g2[1], g2[2] * g2[2]))
-        W12 = W12 + c**2 * c3.dot(Js, (g1[0] * g2[0], g1[1] * g2[1], g1[2] * g2[2]))
+    fields = {}
+    for side, shift in (("l", "left"), ("r", "right")):
+        rho, k, BA = sides[side]
+        d = tuple(_shift(a, shift) for a in d3)
+        delta1, delta2 = d[1] * e2 - d[2] * e1, d[0]  # d₃·û₁, d₃·û₂
+        rho2BA = rho * rho * BA
+        W11 = W11 + rho * k + rho2BA * delta1**2
+        W22 = W22 + rho * k + rho2BA * delta2**2
+        W12 = W12 + rho2BA * delta1 * delta2
+        fields.update({f"d{side}1": delta1, f"d{side}2": delta2})
+        fields.update({f"D{side}{a}": rho * BA * d[i] for i, a in enumerate("xyz")})
     # each of these is read by several kernels below (the table, movable)
     W11, W22, W12 = computed_once((W11, W22, W12), N)
     # a point that nothing can move (a clamped end) takes no impulse
     movable = (W11 * W22 - W12 * W12) > 0
     W11, W22, W12 = jnp.where(movable, W11, 1.0), jnp.where(movable, W22, 1.0), jnp.where(movable, W12, 0.0)
     in_contact = (N > 0) & movable
-    (_, _, g1l, g2l), (_, _, g1r, g2r) = sides
-    fields = dict(cl=cl, cr=cr, W11=W11, W12=W12, W22=W22, bound_s=model.rod.mu_s * N,
+    fields.update(e1=e1, e2=e2, W11=W11, W12=W12, W22=W22, bound_s=model.rod.mu_s * N,
                   bound_d=model.rod.mu_d * N, active=in_contact.astype(dtype))
-    for name, value in (("t2", t2), ("fm", tuple(f / m for f in free_n)), ("g1l", g1l), ("g2l", g2l),
-                        ("g1r", g1r), ("g2r", g2r)):
-        fields.update({f"{name}{k}": value[k] for k in range(3)})
-    fields.update({f"J{k}": jnp.concatenate([Jf[:, k], jnp.zeros((1,), dtype)]) for k in range(3)})
-    # red–black, each colour in arrays of its own: node 2k + c is entry k of colour c, and so is
-    # segment 2k + c (a padded node or segment is inert: W = 1, everything else 0)
+    # red–black, each colour in arrays of its own: node 2k + c is entry k of colour c (a padded
+    # node is inert: W = 1, everything else 0)
     table = jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in FIELDS])  # (fields, n + 1)
     pad = jnp.asarray([1.0 if k in ("W11", "W22") else 0.0 for k in FIELDS], dtype)
     table = jnp.concatenate([table, jnp.broadcast_to(pad[:, None], (len(FIELDS), 2 * M - table.shape[1]))], 1)
-    return table.reshape(len(FIELDS), M, 2)
+    return table.reshape(len(FIELDS), M, 2).transpose(0, 2, 1)  # each colour's row contiguous
 
 
-def friction_pass(model, friction, table, v, w, stuck, force, h):
+def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     """The friction impulses of a (half) step `h` [s] under the law `friction`
     ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]) with the contacts' fields `table`
-    (`friction_table` at this position): projected Gauss–Seidel sweeps, even nodes then odd
-    nodes, started from the impulses `force`·h of the last pass (clipped to this pass's bounds),
-    repeated until no impulse changes by more than `model.friction_tol` × the largest friction
-    bound, or `model.friction_sweeps` sweeps.
+    (`friction_table` at this position, whose directors are `Q`): projected Gauss–Seidel
+    sweeps, even nodes then odd nodes, started from the impulses `force`·h of the last pass
+    (clipped to this pass's bounds), repeated until no impulse changes by more than
+    `model.friction_tol` × the largest friction bound, or `model.friction_sweeps` sweeps.
 
     An impulse p = p₁t₁ + p₂t₂ at node i's contact point moves the node by p/m and, through
-    the arm r_c, spins the node's two segments by their shares c of the torque r_c × p. With
-    u₁ = r_c × t₁ = −r t₂ and u₂ = r_c × t₂ = r t₁ (r = |r_c|), and gₐ = Q uₐ those arms in a
-    segment's material frame, everything is per node and per component: the slip velocity
-    t_a·v + Σ_seg c w·gₐ, the tangent inverse mass W_ab = δ_ab/m (free components) + Σ_seg c²
-    Σ_k gₐₖ g_bₖ / J_k, and the spin change J⁻¹ c Σₐ pₐ gₐ (written out instead of batches of
-    3×3 products, which do not fuse on CPU).
+    the arm r_c = r e_r, spins each of the node's two segments by its share c of the torque
+    r_c × p = r (p₁û₁ + p₂û₂), û₁ = e_r × x̂ = (0, e₂, −e₁) and û₂ = x̂. The pass works with the
+    segments' spins in the lab frame, ω = Qᵀw, where a segment's inverse inertia is
+    A 1 + (B − A) d₃d₃ᵀ (A = 1/J_⊥, B = 1/J_∥ about its axis d₃): the slip velocity is
+    t_a·v + Σ_seg c r ω·ûₐ, the spin change of impulse p is c r (A (p₁û₁ + p₂û₂) + (B − A) d₃
+    (p₁δ₁ + p₂δ₂)) with δₐ = d₃·ûₐ, and the tangent inverse mass W_ab = δ_ab/m (free
+    components) + Σ_seg (c r)² (A δ_ab + (B − A) δₐ δ_b). The pass returns w + Q Δω.
 
     **Returns:** the new `(v, w, stuck, force, residual, sweeps)`: `force` the tangential friction
     force of each contact [N], `residual` the largest change of an impulse in the last sweep over
@@ -136,7 +155,7 @@ def friction_pass(model, friction, table, v, w, stuck, force, h):
     # node 2k + c is entry k of colour c, and so is segment 2k + c. Even node k has segments
     # 2k − 1 (odd k − 1) and 2k (even k) on its left and right, odd node k has segments 2k (even
     # k) and 2k + 1 (odd k): a half sweep solves only its own contacts.
-    M = table.shape[1]
+    M = table.shape[2]
 
     def split(a, fill=0):
         a = jnp.concatenate([a, jnp.full((2 * M - a.shape[0],) + a.shape[1:], fill, a.dtype)])
@@ -150,7 +169,13 @@ def friction_pass(model, friction, table, v, w, stuck, force, h):
     def merge(even, odd, size):
         return jnp.stack([even, odd], 1).reshape((2 * M,) + even.shape[1:])[:size]
 
-    rows = table[:, :, 0], table[:, :, 1]  # each (fields, M): a field is a contiguous row
+    rows = table[:, 0], table[:, 1]  # each (fields, M): a field is a contiguous row
+    fm, sides = _node_constants(model, dtype)
+    const = [{}, {}]
+    for name, value in (("fm", fm), ("rl", sides["l"][0]), ("rr", sides["r"][0]), ("kl", sides["l"][1]),
+                        ("kr", sides["r"][1])):
+        parts = split3(value) if isinstance(value, tuple) else split(value)
+        const[0][name], const[1][name] = parts
 
     def fields_of(c):
         """The colour-`c` fields by name, bounds for this step (read where they are used: inside
@@ -158,38 +183,42 @@ def friction_pass(model, friction, table, v, w, stuck, force, h):
         K = {k: rows[c][i] for i, k in enumerate(FIELDS)}
         K["active"] = K["active"] > 0
         K["bound_s"], K["bound_d"] = h * K["bound_s"], h * K["bound_d"]
-        for name in ("t2", "fm", "g1l", "g2l", "g1r", "g2r", "J"):
-            K[name] = tuple(K.pop(f"{name}{k}") for k in range(3))
+        for side in "lr":
+            K[f"D{side}"] = tuple(K.pop(f"D{side}{a}") for a in "xyz")
+        K.update(const[c])
         return K
 
-    def neighbours(c, w):
+    def neighbours(c, om):
         """The spins of the left and right segments of the colour-`c` nodes."""
         if c == 1:
-            return w[0], w[1]
-        return tuple(jnp.concatenate([jnp.zeros((1,), dtype), a[:-1]]) for a in w[1]), w[0]
+            return om[0], om[1]
+        return tuple(jnp.concatenate([jnp.zeros((1,), dtype), a[:-1]]) for a in om[1]), om[0]
 
-    def slip(node, c, v, w):
+    def slip(node, c, v, om):
         """Tangential velocities (u₁, u₂) of the colour-`c` contact points."""
         K = node[c]
-        wl, wr = neighbours(c, w)
-        return (v[0] + K["cl"] * c3.dot(wl, K["g1l"]) + K["cr"] * c3.dot(wr, K["g1r"]),
-                c3.dot(K["t2"], v) + K["cl"] * c3.dot(wl, K["g2l"]) + K["cr"] * c3.dot(wr, K["g2r"]))
+        ol, orr = neighbours(c, om)
+        sx, sy, sz = (K["rl"] * ol[k] + K["rr"] * orr[k] for k in range(3))  # Σ c r ω
+        return v[0] + K["e2"] * sy - K["e1"] * sz, K["e1"] * v[2] - K["e2"] * v[1] + sx
 
-    def apply(node, c, v, w, dp):
-        """Velocities of the colour-`c` nodes and of all segments after their impulses `dp`."""
-        K, Jseg = node[c], (node[0]["J"], node[1]["J"])
+    def apply(node, c, v, om, dp):
+        """Velocities of the colour-`c` nodes and spins of all segments after their impulses `dp`."""
+        K = node[c]
         p1, p2 = dp
-        v = (v[0] + K["fm"][0] * p1, v[1] + K["fm"][1] * p2 * K["t2"][1], v[2] + K["fm"][2] * p2 * K["t2"][2])
-        tl = tuple(K["cl"] * (p1 * K["g1l"][k] + p2 * K["g2l"][k]) for k in range(3))  # left segment
-        tr = tuple(K["cr"] * (p1 * K["g1r"][k] + p2 * K["g2r"][k]) for k in range(3))  # right segment
+        fm = K["fm"]
+        v = (v[0] + fm[0] * p1, v[1] - fm[1] * p2 * K["e2"], v[2] + fm[2] * p2 * K["e1"])
+        torque = (p2, p1 * K["e2"], -p1 * K["e1"])  # p₁û₁ + p₂û₂
+        ql, qr = p1 * K["dl1"] + p2 * K["dl2"], p1 * K["dr1"] + p2 * K["dr2"]
+        tl = tuple(K["kl"] * torque[k] + K["Dl"][k] * ql for k in range(3))  # left segment
+        tr = tuple(K["kr"] * torque[k] + K["Dr"][k] * qr for k in range(3))  # right segment
         if c == 0:  # left: odd segment k − 1, right: even segment k
             tl = tuple(jnp.concatenate([a[1:], jnp.zeros((1,), dtype)]) for a in tl)
-            we = tuple(w[0][k] + Jseg[0][k] * tr[k] for k in range(3))
-            wo = tuple(w[1][k] + Jseg[1][k] * tl[k] for k in range(3))
+            oe = tuple(om[0][k] + tr[k] for k in range(3))
+            oo = tuple(om[1][k] + tl[k] for k in range(3))
         else:  # left: even segment k, right: odd segment k
-            we = tuple(w[0][k] + Jseg[0][k] * tl[k] for k in range(3))
-            wo = tuple(w[1][k] + Jseg[1][k] * tr[k] for k in range(3))
-        return v, (we, wo)
+            oe = tuple(om[0][k] + tl[k] for k in range(3))
+            oo = tuple(om[1][k] + tr[k] for k in range(3))
+        return v, (oe, oo)
 
     node = (fields_of(0), fields_of(1))
     scale = jnp.maximum(jnp.maximum(*(jnp.max(jnp.where(K["active"], K["bound_s"], 0.0)) for K in node)),
@@ -205,18 +234,20 @@ def friction_pass(model, friction, table, v, w, stuck, force, h):
         k = jnp.where(K["active"] & (norm > cap), cap / jnp.where(norm > 0, norm, 1.0), 1.0)  # no 0·∞ in a jvp
         p0[c] = tuple(jnp.where(K["active"], k * p, 0.0) for p in p0[c])
     vs = list(split3(c3.unpack(v)))
-    w = split3(c3.unpack(w))
+    Qr = c3.unpack_matrix(Q)
+    om0 = c3.rmatvec(Qr, c3.unpack(w))  # the spins in the lab frame, ω = Qᵀw
+    om = split3(om0)
     for c in (0, 1):
-        vs[c], w = apply(node, c, vs[c], w, p0[c])
+        vs[c], om = apply(node, c, vs[c], om, p0[c])
 
     def sweep(carry):
-        vs, w, stucks, p_acc, _, k = carry
+        vs, om, stucks, p_acc, _, k = carry
         vs, stucks, p_acc = list(vs), list(stucks), list(p_acc)
         change = jnp.zeros((), dtype)
         node = (fields_of(0), fields_of(1))
         for c in (0, 1):
             K = node[c]
-            s1, s2 = slip(node, c, vs[c], w)
+            s1, s2 = slip(node, c, vs[c], om)
             pa = p_acc[c]
             u = (s1 - (K["W11"] * pa[0] + K["W12"] * pa[1]), s2 - (K["W12"] * pa[0] + K["W22"] * pa[1]))  # without own
             p, sticks = friction.impulse_2d(u, (K["W11"], K["W12"], K["W22"]),
@@ -225,25 +256,26 @@ def friction_pass(model, friction, table, v, w, stuck, force, h):
             p = (jnp.where(K["active"], p[0], 0.0), jnp.where(K["active"], p[1], 0.0))
             dp = (p[0] - pa[0], p[1] - pa[1])
             change = jnp.maximum(change, jnp.max(safe_hypot(*dp)))
-            vs[c], w = apply(node, c, vs[c], w, dp)
+            vs[c], om = apply(node, c, vs[c], om, dp)
             p_acc[c], stucks[c] = p, K["active"] & sticks
-        return tuple(vs), w, tuple(stucks), tuple(p_acc), change / scale, k + 1
+        return tuple(vs), om, tuple(stucks), tuple(p_acc), change / scale, k + 1
 
     def more(carry):
         k = carry[-1]
         return (k == 0) | ((k < model.friction_sweeps) & (carry[-2] > model.friction_tol))
 
-    carry = (tuple(vs), w, stucks, tuple(p0), jnp.zeros((), dtype), 0)
+    carry = (tuple(vs), om, stucks, tuple(p0), jnp.zeros((), dtype), 0)
     if model.friction_sweeps == 1:  # no loop: reverse-mode differentiable
         carry = sweep(carry)
     else:  # one compiled copy of the sweep, in the loop (compile time)
         # (under vmap, the loop's batching keeps a converged member's carry while the others
         # sweep on, so a batch member equals its single run)
         carry = jax.lax.while_loop(more, sweep, carry)
-    vs, w, stucks, p_acc, residual, sweeps = carry
+    vs, om, stucks, p_acc, residual, sweeps = carry
     n1 = model.n + 1
     v = jnp.stack([merge(vs[0][k], vs[1][k], n1) for k in range(3)], -1)
-    w = jnp.stack([merge(w[0][k], w[1][k], model.n) for k in range(3)], -1)
+    d_om = tuple(merge(om[0][k], om[1][k], model.n) - om0[k] for k in range(3))
+    w = w + c3.pack(c3.matvec(Qr, d_om))  # back to the material frame: w + Q Δω
     force = jnp.stack([merge(p_acc[0][a], p_acc[1][a], n1) for a in range(2)], -1) / jnp.where(h > 0, h, 1.0)
     any_contact = jnp.any(node[0]["active"]) | jnp.any(node[1]["active"])
     return (v, w, merge(*stucks, n1), force, jnp.where(any_contact, residual, 0.0),

@@ -27,7 +27,7 @@ from . import energy
 from .contact import friction_pass, friction_table
 from . import components as c3
 from . import measures
-from .state import Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
+from .state import held_pattern, Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
 from .stiffness import max_frequency
 
 __all__ = ["Rod3D"]
@@ -189,18 +189,8 @@ class Rod3D(AbstractModel):
 
     def held(self) -> tuple[Bool[Array, "n1 3"], Bool[Array, "n 3"]]:
         """Which node velocity components are prescribed, and which segment spin components
-        (material frame) are held at zero."""
-        nodes = np.zeros((self.n + 1, 3), bool)
-        segs = np.zeros((self.n, 3), bool)
-        if self.ends != "free":
-            nodes[[0, -1]] = True
-            if self.control == "load":
-                nodes[-1, 0] = False
-        if self.ends == "clamped":
-            segs[[0, -1]] = True
-        elif self.ends == "fork":
-            segs[[0, -1], 2] = True  # the spin about d₃
-        return jnp.asarray(nodes), jnp.asarray(segs)
+        (material frame) are held at zero (`jaxrod.rod3d.state.held_pattern`)."""
+        return tuple(jnp.asarray(a) for a in held_pattern(self))
 
     def prescribed_velocity(self) -> Float[Array, "n1 3"]:
         """Velocity of the held nodes (the pushed end moves along −x at `speed`)."""
@@ -283,8 +273,8 @@ class Rod3D(AbstractModel):
                         q: Rod3DPosition | None = None, a: Rod3DForces | None = None) -> Rod3DVelocity:
         """The wall friction impulses of a (half) step `h` at the contact points of `q` (their
         fields: `a.table`); a step of zero length changes nothing (not even the stuck flags)."""
-        v, w, stuck, force, res, sweeps = self.friction_step(friction, a.table, v_trial.v, v_trial.w, v_prev.stuck,
-                                                             v_trial.force, h)
+        v, w, stuck, force, res, sweeps = self.friction_step(friction, a.table, q.Q, v_trial.v, v_trial.w,
+                                                             v_prev.stuck, v_trial.force, h)
         v, w = self.constrain(v, w)
         moved = h > 0
         return Rod3DVelocity(v, w, jnp.where(moved, stuck, v_prev.stuck), jnp.where(moved, force, v_trial.force),
@@ -335,10 +325,11 @@ class Rod3D(AbstractModel):
     def forces(self, x, Q, v):
         return energy.forces(self, x, Q, v)
 
-    def friction_step(self, friction, table, v, w, stuck, force, h):
+    def friction_step(self, friction, table, Q, v, w, stuck, force, h):
         """The friction impulses of a (half) step `h` [s] under `friction` with the contacts' fields
-        `table`: the new (v, w, stuck, force, residual, sweeps) (`contact.friction_pass`)."""
-        return friction_pass(self, friction, table, v, w, stuck, force, h)
+        `table` at directors `Q`: the new (v, w, stuck, force, residual, sweeps)
+        (`contact.friction_pass`)."""
+        return friction_pass(self, friction, table, Q, v, w, stuck, force, h)
 
     # -- constraints and the step limit -------------------------------------------------------
     def constrain(self, v, w):

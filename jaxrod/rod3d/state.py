@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 from .._numerics import float_leaf, safe_norm
 from .._trig import atan2
 
 
-__all__ = ["Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "at_rest", "straight_state", "wall_angle", "sine_velocity"]
+__all__ = ["held_pattern", "Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "at_rest", "straight_state", "wall_angle", "sine_velocity"]
 
 
 class Rod3DPosition(eqx.Module):
@@ -51,7 +52,24 @@ class Rod3DForces(eqx.Module):
     tau: Float[Array, "n 3"]
     N: Float[Array, " n1"]
     fd: Float[Array, "n1 3"]
-    table: Float[Array, "fields m 2"]
+    table: Float[Array, "fields 2 m"]
+
+
+def held_pattern(model) -> tuple[np.ndarray, np.ndarray]:
+    """Which node velocity components (n+1, 3) are prescribed and which segment spin components
+    (n, 3, material frame) are held at zero, as NumPy arrays (static: they follow from the
+    model's `ends` and `control`)."""
+    nodes = np.zeros((model.n + 1, 3), bool)
+    segs = np.zeros((model.n, 3), bool)
+    if model.ends != "free":
+        nodes[[0, -1]] = True
+        if model.control == "load":
+            nodes[-1, 0] = False
+    if model.ends == "clamped":
+        segs[[0, -1]] = True
+    elif model.ends == "fork":
+        segs[[0, -1], 2] = True  # the spin about d₃
+    return nodes, segs
 
 
 def at_rest(q: Rod3DPosition) -> Rod3DVelocity:
