@@ -117,5 +117,5 @@ def left_jacobian_inv_t(psi, m, trig=None):
     sin, cos = sincos(ths) if trig is None else trig
     c = jnp.where(small, 1.0 / 12.0 + th2 / 720.0 + th2**2 / 30240.0,
                   1.0 / ths**2 - (1.0 + cos) / (2.0 * ths * jnp.where(small, 1.0, sin)))
-    pm = cross(psi, m)
+    pm = computed_once(cross(psi, m), th2)  # read by every component of the result
     return add(m, add(scale(0.5, pm), scale(c, cross(psi, pm))))
