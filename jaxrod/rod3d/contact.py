@@ -87,11 +87,10 @@ def friction_table(model, x, Q, N):
     Every pass at a position uses them (projected leapfrog: the one pass of the next step and
     the pass of a save; projected Verlet: the second pass of a step and the first of the next),
     so `Rod3D.accelerations` computes this once per position and the forces carry it. An array
-    (len(FIELDS), 2, M): field, colour c, entry k for node 2k + c (padded nodes inert)."""
+    (len(FIELDS), n + 1): field, node."""
     dtype = x.dtype
-    M = colours(model.n)
     if not model.channel:  # no wall, no contact: an inert table
-        return jnp.zeros((len(FIELDS), 2, M), dtype)
+        return jnp.zeros((len(FIELDS), model.n + 1), dtype)
     # a held node still touches the wall: its translation is prescribed (the support takes the
     # friction force) but the friction at its contact point still acts on its segments' spin, so
     # the end of the rod cannot roll freely (without it the interior rolls sideways as one body,
@@ -121,12 +120,7 @@ def friction_table(model, x, Q, N):
     in_contact = (N > 0) & movable
     fields.update(e1=e1, e2=e2, W11=W11, W12=W12, W22=W22, bound_s=model.rod.mu_s * N,
                   bound_d=model.rod.mu_d * N, active=in_contact.astype(dtype))
-    # red–black, each colour in arrays of its own: node 2k + c is entry k of colour c (a padded
-    # node is inert: W = 1, everything else 0)
-    table = jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in FIELDS])  # (fields, n + 1)
-    pad = jnp.asarray([1.0 if k in ("W11", "W22") else 0.0 for k in FIELDS], dtype)
-    table = jnp.concatenate([table, jnp.broadcast_to(pad[:, None], (len(FIELDS), 2 * M - table.shape[1]))], 1)
-    return table.reshape(len(FIELDS), M, 2).transpose(0, 2, 1)  # each colour's row contiguous
+    return jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in FIELDS])
 
 
 def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
@@ -155,7 +149,7 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     # node 2k + c is entry k of colour c, and so is segment 2k + c. Even node k has segments
     # 2k − 1 (odd k − 1) and 2k (even k) on its left and right, odd node k has segments 2k (even
     # k) and 2k + 1 (odd k): a half sweep solves only its own contacts.
-    M = table.shape[2]
+    M = colours(model.n)
 
     def split(a, fill=0):
         a = jnp.concatenate([a, jnp.full((2 * M - a.shape[0],) + a.shape[1:], fill, a.dtype)])
@@ -169,7 +163,12 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     def merge(even, odd, size):
         return jnp.stack([even, odd], 1).reshape((2 * M,) + even.shape[1:])[:size]
 
-    rows = table[:, 0], table[:, 1]  # each (fields, M): a field is a contiguous row
+    # red–black, each colour in arrays of its own: node 2k + c is entry k of colour c (a padded
+    # node is inert: W = 1, everything else 0); each (fields, M), a field a contiguous row
+    pad = jnp.asarray([1.0 if k in ("W11", "W22") else 0.0 for k in FIELDS], dtype)
+    table = jnp.concatenate([table, jnp.broadcast_to(pad[:, None], (len(FIELDS), 2 * M - table.shape[1]))], 1)
+    table = table.reshape(len(FIELDS), M, 2)
+    rows = table[:, :, 0], table[:, :, 1]
     fm, sides = _node_constants(model, dtype)
     const = [{}, {}]
     for name, value in (("fm", fm), ("rl", sides["l"][0]), ("rr", sides["r"][0]), ("kl", sides["l"][1]),
