@@ -8,8 +8,14 @@ sweep, kick, drift, stop test, work) and of the whole one-sweep step of the defa
 (projected leapfrog); the step timed in a loop of 500 steps (one process, min of 5) from a state
 100 steps into the benchmark case of `rod3d_step.py` (reference rod, μ = 0.3, dead load
 F⁰₆ + 5 N, sine mode-6 velocity 20 mm/s, 0.5 of the step limit); the rate = operations / time.
-Then the probe: Horner polynomials (8 and 32 terms, 2 operations each) on float64 arrays of
-64–4096 elements in a loop of 2000, the rate XLA's fused elementwise code reaches here.
+Then the friction pass alone at a converged pass's state, timed with 1 sweep (no loop), and with
+2 and 4 sweeps forced (`friction_tol` 0): the cost of one sweep, of the rest of the pass, and
+the kernels (fusions and unfused operations of the optimised HLO) one sweep runs. Then two
+probes of this CPU: Horner polynomials (8 and 32 terms, 2 operations each) on float64 arrays of
+64–4096 elements in a loop of 2000, the rate XLA's fused elementwise code reaches; and a chain
+of kernels that XLA may not merge (`optimization_barrier` between two operations on arrays of
+64–4000 elements), what one kernel costs at the sizes of the 3D rod's arrays (251 entries per
+colour and 501 nodes at 500 segments).
 
     python benchmarks/rod3d_flops.py            # n = 60, 120, 500 (~1 min)
     python benchmarks/rod3d_flops.py --n 500
@@ -77,6 +83,69 @@ def step_rows(n: int) -> list[dict]:
     return rows
 
 
+def pass_rows(n: int) -> list[dict]:
+    """The friction pass at the benchmark case's state after 100 steps: µs for 1 (no loop), 2
+    and 4 sweeps (forced) and the kernels of one sweep."""
+    from jaxrod import theory
+    from jaxrod.integrators import ProjectedLeapfrog
+    from jaxrod.params import RodChannel
+    from jaxrod.rod3d import Rod3D, sine_velocity, step_limit
+
+    rod = RodChannel.reference(0.3)
+    F = float(theory.reference_load(rod)) + 5.0
+    base = Rod3D(rod, n, control="load", end_load=F)
+    q, v = base.initial_state(F, lateral_velocity=sine_velocity(base, 20e-3))
+    dt = 0.5 * float(step_limit(base, q))
+    integ = ProjectedLeapfrog(dt)
+    a = base.accelerations(q, v, 0.0)
+    stepj = jax.jit(lambda q, v, a: integ.step(base, q, v, a, 1.0, dt)[:3])
+    for _ in range(100):
+        q, v, a = stepj(q, v, a)
+    us = {}
+    for sweeps in (1, 2, 4):
+        m = Rod3D(rod, n, control="load", end_load=F, friction_sweeps=sweeps, friction_tol=0.0)
+        body = lambda c, m=m: (c[0], m.friction_update(integ.friction, c[1], c[1], dt, 0.0, c[0], c[2]), c[2])
+        us[sweeps] = _loop_time(body, (q, v, a), 500) * 1e6
+    m = Rod3D(rod, n, control="load", end_load=F, friction_sweeps=4, friction_tol=0.0)
+    text = jax.jit(lambda v, a: m.friction_update(integ.friction, v, v, dt, 0.0, q, a)).lower(v, a).compile().as_text()
+    per_sweep = (us[4] - us[2]) / 2
+    return [dict(n=n, us_1=us[1], us_2=us[2], us_4=us[4], per_sweep=per_sweep, rest=us[2] - 2 * per_sweep,
+                 sweep_kernels=_sweep_kernels(text))]
+
+
+def _sweep_kernels(text: str) -> int:
+    """Fusions and unfused operations in the body of the (one) while loop of `text`."""
+    import re
+
+    comps, cur = {}, None
+    for line in text.splitlines():
+        m = re.match(r"^(?:ENTRY )?%?([\w.\-]+) .*\{$", line)
+        if m and not line.startswith(" "):
+            cur = comps[m.group(1)] = []
+        elif cur is not None and line.startswith("  ") and " = " in line:
+            cur.append(line.split(" = ", 1)[1])
+    body = re.search(r"while\(.*body=%?([\w.\-]+)", text).group(1)
+    skip = {"parameter", "constant", "get-tuple-element", "tuple", "bitcast"}
+    ops = [re.search(r"\s([a-z\-]+)\(", " " + ins.split(" ", 1)[1]).group(1) for ins in comps[body]]
+    return sum(o not in skip for o in ops)
+
+
+def kernel_rows() -> list[dict]:
+    """What one kernel costs: chains of 10 and 110 kernels (x·a + b, then a barrier XLA may not
+    fuse across) on float64 arrays, the difference per kernel."""
+    rows = []
+    for size in (64, 251, 501, 1000, 4000):
+        def chain(count, size=size):
+            def body(x):
+                for _ in range(count):
+                    x = jax.lax.optimization_barrier(x * 1.0000001 + 1e-9)
+                return x
+            return _loop_time(body, jnp.ones(size), 2000)
+
+        rows.append(dict(size=size, ns=(chain(110) - chain(10)) / 100 * 1e9))
+    return rows
+
+
 def probe_rows() -> list[dict]:
     rows = []
     for size in (64, 128, 512, 4096):
@@ -100,8 +169,15 @@ def main():
         for r in step_rows(n):
             extra = f"   {r['us']:.1f} us per step, {r['gflops']:.1f} GFlop/s" if "us" in r else ""
             print(f"n = {n:4d}  {r['piece']:24s} {r['ops_per_node']:7.0f} operations per node{extra}", flush=True)
+    for n in args.n:
+        for r in pass_rows(n):
+            print(f"n = {n:4d}  friction pass: {r['us_1']:.1f} us with 1 sweep (no loop), {r['us_2']:.1f} with 2, "
+                  f"{r['us_4']:.1f} with 4: {r['per_sweep']:.1f} us per sweep ({r['sweep_kernels']} kernels), "
+                  f"{r['rest']:.1f} us for the rest of a looped pass", flush=True)
     for r in probe_rows():
         print(f"probe: {r['terms']:2d}-term Horner on {r['size']:5d} float64: {r['gflops']:5.1f} GFlop/s", flush=True)
+    for r in kernel_rows():
+        print(f"probe: one kernel (2 operations) on {r['size']:5d} float64: {r['ns']:5.0f} ns", flush=True)
 
 
 if __name__ == "__main__":
