@@ -86,11 +86,12 @@ def friction_table(model, x, Q, N):
     segment's axis d₃, and D = c r (B − A) d₃ [1/(kg·m)] (`friction_pass` gives every symbol).
     Every pass at a position uses them (projected leapfrog: the one pass of the next step and
     the pass of a save; projected Verlet: the second pass of a step and the first of the next),
-    so `Rod3D.accelerations` computes this once per position and the forces carry it. An array
-    (len(FIELDS), n + 1): field, node."""
+    so `Rod3D.accelerations` computes this once per position and the forces carry it. Two arrays
+    (len(FIELDS), M), one per colour of the pass's red–black split: field, entry k for node
+    2k + c (padded nodes inert)."""
     dtype = x.dtype
     if not model.channel:  # no wall, no contact: an inert table
-        return jnp.zeros((len(FIELDS), model.n + 1), dtype)
+        return (jnp.zeros((len(FIELDS), colours(model.n)), dtype),) * 2
     # a held node still touches the wall: its translation is prescribed (the support takes the
     # friction force) but the friction at its contact point still acts on its segments' spin, so
     # the end of the rod cannot roll freely (without it the interior rolls sideways as one body,
@@ -120,7 +121,15 @@ def friction_table(model, x, Q, N):
     in_contact = (N > 0) & movable
     fields.update(e1=e1, e2=e2, W11=W11, W12=W12, W22=W22, bound_s=model.rod.mu_s * N,
                   bound_d=model.rod.mu_d * N, active=in_contact.astype(dtype))
-    return jnp.stack([jnp.broadcast_to(fields[k], W11.shape) for k in FIELDS])
+    # red–black, each colour an array of its own: node 2k + c is entry k of colour c (a padded
+    # node is inert: W = 1, everything else 0)
+    M = colours(model.n)
+    columns = []
+    for k in FIELDS:
+        a = jnp.broadcast_to(fields[k], W11.shape)
+        a = jnp.concatenate([a, jnp.full((2 * M - a.shape[0],), 1.0 if k in ("W11", "W22") else 0.0, dtype)])
+        columns.append(a.reshape(M, 2))
+    return tuple(jnp.stack([a[:, c] for a in columns]) for c in (0, 1))
 
 
 def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
@@ -163,12 +172,7 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     def merge(even, odd, size):
         return jnp.stack([even, odd], 1).reshape((2 * M,) + even.shape[1:])[:size]
 
-    # red–black, each colour in arrays of its own: node 2k + c is entry k of colour c (a padded
-    # node is inert: W = 1, everything else 0); each (fields, M), a field a contiguous row
-    pad = jnp.asarray([1.0 if k in ("W11", "W22") else 0.0 for k in FIELDS], dtype)
-    table = jnp.concatenate([table, jnp.broadcast_to(pad[:, None], (len(FIELDS), 2 * M - table.shape[1]))], 1)
-    table = table.reshape(len(FIELDS), M, 2)
-    rows = table[:, :, 0], table[:, :, 1]
+    rows = table  # each colour's (fields, M): a field is a contiguous row
     fm, sides = _node_constants(model, dtype)
     const = [{}, {}]
     for name, value in (("fm", fm), ("rl", sides["l"][0]), ("rr", sides["r"][0]), ("kl", sides["l"][1]),

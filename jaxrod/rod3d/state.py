@@ -52,7 +52,7 @@ class Rod3DForces(eqx.Module):
     tau: Float[Array, "n 3"]
     N: Float[Array, " n1"]
     fd: Float[Array, "n1 3"]
-    table: Float[Array, "fields n1"]
+    table: tuple[Float[Array, "fields m"], Float[Array, "fields m"]]
 
 
 def held_pattern(model) -> tuple[np.ndarray, np.ndarray]:
