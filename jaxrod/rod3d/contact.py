@@ -52,6 +52,15 @@ def colours(n: int) -> int:
     return (n + 2) // 2
 
 
+def _split(a, M: int, fill=0):
+    """The red–black halves of `a` along its first axis: entries 0, 2, 4, … and 1, 3, 5, …,
+    each padded with `fill` to M (strided slices, which the kernels that read them fuse)."""
+    def pad(b):
+        extra = M - b.shape[0]
+        return b if extra == 0 else jnp.concatenate([b, jnp.full((extra,) + b.shape[1:], fill, a.dtype)])
+    return pad(a[0::2]), pad(a[1::2])
+
+
 def _node_constants(model, dtype):
     """What the friction pass needs of each node that does not depend on the position, as
     arrays (n + 1,): the inverse mass of its free translations `fm` (x, y, z) [1/kg], and for its
@@ -161,9 +170,7 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     M = colours(model.n)
 
     def split(a, fill=0):
-        a = jnp.concatenate([a, jnp.full((2 * M - a.shape[0],) + a.shape[1:], fill, a.dtype)])
-        a = a.reshape((M, 2) + a.shape[1:])
-        return a[:, 0], a[:, 1]
+        return _split(a, M, fill)
 
     def split3(t, fill=0):
         parts = [split(c, fill) for c in t]
