@@ -70,7 +70,8 @@ def _node_constants(model, dtype):
     [1/(kg·m²)]."""
     held_n, held_s = held_pattern(model)
     if not np.array_equal(held_s[:, 0], held_s[:, 1]):
-        raise ValueError("Rod3D.held: the two transverse spin components of a segment are held together.")
+        raise ValueError("Rod3D.held: a segment's two transverse spin components must be held together "
+                         "(the friction pass's lab-frame inverse inertia assumes it).")
     inv_m = 1.0 / model.mass.astype(dtype)
     fm = tuple(jnp.asarray(~held_n[:, k], dtype) * inv_m for k in range(3))
     r = _arm(model, dtype)
