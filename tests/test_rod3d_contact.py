@@ -1,0 +1,114 @@
+"""The 3D rod's friction pass against the material-frame formulas it replaces: the tangent inverse
+mass W of every contact, and the spin and velocity an impulse gives, from a brute-force sum over
+the segments' material frames (gₐ = Q uₐ, J⁻¹ = diag(1/J₁, 1/J₂, 1/J₃) with held components 0)
+for rotated directors, every end condition and friction at the contact point or the axis."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod.rod3d import Rod3D
+from jaxrod.rod3d.contact import FIELDS, friction_pass, friction_table
+from jaxrod.rod3d.so3 import exp_so3
+
+
+def _state(model, seed=0):
+    """A straight rod displaced along the wall (e_r varies node by node), its segments turned by
+    random rotations of up to ~0.5 rad (d₃ no longer along x), and positive normal forces."""
+    rng = np.random.default_rng(seed)
+    n = model.n
+    q, v = model.initial_state(lateral_offset=0.4 * model.rod.R * np.sin(np.linspace(0, 3, n + 1)))
+    Q = jnp.einsum("jab,jbc->jac", q.Q, exp_so3(jnp.asarray(rng.normal(0, 0.3, (n, 3)))))
+    N = jnp.asarray(rng.uniform(0.5, 2.0, n + 1))
+    return q.x, Q, N, v
+
+
+def _natural(table, name, n):
+    """Field `name` of the per-colour table in node order."""
+    i = FIELDS.index(name)
+    even, odd = table
+    return np.stack([np.asarray(even[i]), np.asarray(odd[i])], 1).reshape(-1)[: n + 1]
+
+
+def _reference_W(model, x, Q):
+    """W from the material-frame formula, node by node."""
+    n = model.n
+    held_n, held_s = (np.asarray(a) for a in model.held())
+    m, J = np.asarray(model.mass), np.asarray(model.inertia)
+    r = 0.5 * float(model.rod.d) if model.friction_at == "surface" else 0.0
+    x, Q = np.asarray(x), np.asarray(Q)
+    out = np.zeros((n + 1, 3))
+    for i in range(n + 1):
+        rad = np.hypot(x[i, 1], x[i, 2])
+        e1, e2 = x[i, 1] / rad, x[i, 2] / rad
+        u = [r * np.array([0.0, e2, -e1]), r * np.array([1.0, 0.0, 0.0])]  # r_c × t₁, r_c × t₂
+        W = np.diag([(~held_n[i, 0]) / m[i], 0.0])
+        W[1, 1] = ((~held_n[i, 1]) * e2**2 + (~held_n[i, 2]) * e1**2) / m[i]
+        segments = [j for j in (i - 1, i) if 0 <= j < n]
+        c = 1.0 / len(segments)
+        for j in segments:
+            g = [Q[j] @ ua for ua in u]
+            Jinv = np.where(held_s[j], 0.0, 1.0 / J)
+            for a in range(2):
+                for b in range(2):
+                    W[a, b] += c**2 * np.sum(Jinv * g[a] * g[b])
+        if np.linalg.det(W) <= 0:  # nothing can move the point: inert
+            W = np.eye(2)
+        out[i] = W[0, 0], W[0, 1], W[1, 1]
+    return out
+
+
+@pytest.mark.parametrize("ends", ["pinned", "fork", "clamped"])
+@pytest.mark.parametrize("friction_at", ["surface", "axis"])
+def test_tangent_inverse_mass_matches_the_material_frame_sum(ends, friction_at):
+    rod = jr.RodChannel.reference(0.3)
+    model = Rod3D(rod, 9, ends=ends, friction_at=friction_at)
+    x, Q, N, _ = _state(model)
+    table = friction_table(model, x, Q, N)
+    ref = _reference_W(model, x, Q)
+    for k, name in enumerate(("W11", "W12", "W22")):
+        np.testing.assert_allclose(_natural(table, name, model.n), ref[:, k], rtol=1e-12, atol=1e-12 * ref.max())
+
+
+def test_one_impulse_moves_the_node_and_spins_its_segments_as_the_material_frame_says():
+    """A single active contact, no others: the pass's impulse p (whatever the law made of it)
+    changes the node's velocity by p₁t₁/m + p₂t₂/m and each adjacent segment's material spin by
+    c J⁻¹ Σₐ pₐ gₐ, gₐ = Q uₐ; the contact point then moves as W p predicts."""
+    rod = jr.RodChannel.reference(0.3)
+    model = Rod3D(rod, 9, ends="fork")
+    x, Q, N, v = _state(model, seed=1)
+    i = 4
+    N = jnp.zeros_like(N).at[i].set(1.5)
+    table = friction_table(model, x, Q, N)
+    rng = np.random.default_rng(2)
+    v0 = jnp.asarray(rng.normal(0, 1e-3, (model.n + 1, 3)))
+    w0 = jnp.asarray(rng.normal(0, 1e-1, (model.n, 3)))
+    h = 1e-5
+    v1, w1, *_ = jax.jit(lambda t, Q, v, w: friction_pass(model, jr.Coulomb(), t, Q, v, w,
+                                                         jnp.zeros(model.n + 1, bool),
+                                                         jnp.zeros((model.n + 1, 2)), h))(table, Q, v0, w0)
+    dv, dw = np.asarray(v1 - v0), np.asarray(w1 - w0)
+    m, J = np.asarray(model.mass), np.asarray(model.inertia)
+    xi = np.asarray(x[i])
+    e1, e2 = xi[1] / np.hypot(xi[1], xi[2]), xi[2] / np.hypot(xi[1], xi[2])
+    t1, t2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, -e2, e1])
+    p1, p2 = m[i] * dv[i, 0], m[i] * (dv[i] @ t2)
+    assert np.hypot(p1, p2) > 0
+    np.testing.assert_allclose(dv[i], (p1 * t1 + p2 * t2) / m[i], rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(np.delete(dv, i, 0), 0.0, atol=1e-18)  # no other node moves
+    r = 0.5 * float(rod.d)
+    u = [r * np.array([0.0, e2, -e1]), r * t1]
+    Qn = np.asarray(Q)
+    for j in (i - 1, i):
+        expected = 0.5 * (p1 * (Qn[j] @ u[0]) + p2 * (Qn[j] @ u[1])) / J
+        np.testing.assert_allclose(dw[j], expected, rtol=1e-10, atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_allclose(np.delete(dw, [i - 1, i], 0), 0.0, atol=1e-15)
+    # slip change = W p
+    W11, W12, W22 = (_natural(table, k, model.n)[i] for k in ("W11", "W12", "W22"))
+    slip = lambda v, w: np.array([
+        v[i] @ t1 + sum(0.5 * (np.asarray(w)[j] @ (Qn[j] @ u[0])) for j in (i - 1, i)),
+        v[i] @ t2 + sum(0.5 * (np.asarray(w)[j] @ (Qn[j] @ u[1])) for j in (i - 1, i))])
+    ds = slip(np.asarray(v1), w1) - slip(np.asarray(v0), w0)
+    np.testing.assert_allclose(ds, [W11 * p1 + W12 * p2, W12 * p1 + W22 * p2], rtol=1e-9)
