@@ -50,16 +50,21 @@ def _loop_time(body, init, K: int) -> float:
     return best / K
 
 
-def step_rows(n: int) -> list[dict]:
+def _case(n: int, **model_kw):
+    """The benchmark case of `rod3d_step.py` at `n` segments, 100 steps in (the model made with
+    `model_kw`): `(make, q, v, a, dt, integ)`, `make(**kw)` a model of the case."""
     from jaxrod import theory
     from jaxrod.integrators import ProjectedLeapfrog
     from jaxrod.params import RodChannel
     from jaxrod.rod3d import Rod3D, sine_velocity, step_limit
-    from jaxrod.rod3d.contact import friction_table
 
     rod = RodChannel.reference(0.3)
     F = float(theory.reference_load(rod)) + 5.0
-    model = Rod3D(rod, n, control="load", end_load=F, friction_sweeps=1)
+
+    def make(**kw):
+        return Rod3D(rod, n, control="load", end_load=F, **kw)
+
+    model = make(**model_kw)
     q, v = model.initial_state(F, lateral_velocity=sine_velocity(model, 20e-3))
     dt = 0.5 * float(step_limit(model, q))
     integ = ProjectedLeapfrog(dt)
@@ -67,6 +72,14 @@ def step_rows(n: int) -> list[dict]:
     stepj = jax.jit(lambda q, v, a: integ.step(model, q, v, a, 1.0, dt)[:3])
     for _ in range(100):
         q, v, a = stepj(q, v, a)
+    return make, q, v, a, dt, integ
+
+
+def step_rows(n: int) -> list[dict]:
+    from jaxrod.rod3d.contact import friction_table
+
+    make, q, v, a, dt, integ = _case(n, friction_sweeps=1)
+    model = make(friction_sweeps=1)
     pieces = {
         "forces": (lambda q, v: model.forces(q.x, q.Q, v.v), q, v),
         "contact fields": (lambda q: friction_table(model, q.x, q.Q, a.N), q),
@@ -86,48 +99,21 @@ def step_rows(n: int) -> list[dict]:
 def pass_rows(n: int) -> list[dict]:
     """The friction pass at the benchmark case's state after 100 steps: µs for 1 (no loop), 2
     and 4 sweeps (forced) and the kernels of one sweep."""
-    from jaxrod import theory
-    from jaxrod.integrators import ProjectedLeapfrog
-    from jaxrod.params import RodChannel
-    from jaxrod.rod3d import Rod3D, sine_velocity, step_limit
-
-    rod = RodChannel.reference(0.3)
-    F = float(theory.reference_load(rod)) + 5.0
-    base = Rod3D(rod, n, control="load", end_load=F)
-    q, v = base.initial_state(F, lateral_velocity=sine_velocity(base, 20e-3))
-    dt = 0.5 * float(step_limit(base, q))
-    integ = ProjectedLeapfrog(dt)
-    a = base.accelerations(q, v, 0.0)
-    stepj = jax.jit(lambda q, v, a: integ.step(base, q, v, a, 1.0, dt)[:3])
-    for _ in range(100):
-        q, v, a = stepj(q, v, a)
-    us = {}
-    for sweeps in (1, 2, 4):
-        m = Rod3D(rod, n, control="load", end_load=F, friction_sweeps=sweeps, friction_tol=0.0)
-        body = lambda c, m=m: (c[0], m.friction_update(integ.friction, c[1], c[1], dt, 0.0, c[0], c[2]), c[2])
-        us[sweeps] = _loop_time(body, (q, v, a), 500) * 1e6
-    m = Rod3D(rod, n, control="load", end_load=F, friction_sweeps=4, friction_tol=0.0)
-    text = jax.jit(lambda v, a: m.friction_update(integ.friction, v, v, dt, 0.0, q, a)).lower(v, a).compile().as_text()
-    per_sweep = (us[4] - us[2]) / 2
-    return [dict(n=n, us_1=us[1], us_2=us[2], us_4=us[4], per_sweep=per_sweep, rest=us[2] - 2 * per_sweep,
-                 sweep_kernels=_sweep_kernels(text))]
-
-
-def _sweep_kernels(text: str) -> int:
-    """Fusions and unfused operations in the body of the (one) while loop of `text`."""
     import re
 
-    comps, cur = {}, None
-    for line in text.splitlines():
-        m = re.match(r"^(?:ENTRY )?%?([\w.\-]+) .*\{$", line)
-        if m and not line.startswith(" "):
-            cur = comps[m.group(1)] = []
-        elif cur is not None and line.startswith("  ") and " = " in line:
-            cur.append(line.split(" = ", 1)[1])
-    body = re.search(r"while\(.*body=%?([\w.\-]+)", text).group(1)
-    skip = {"parameter", "constant", "get-tuple-element", "tuple", "bitcast"}
-    ops = [re.search(r"\s([a-z\-]+)\(", " " + ins.split(" ", 1)[1]).group(1) for ins in comps[body]]
-    return sum(o not in skip for o in ops)
+    from rod3d_step import hlo_computations, kernels
+
+    make, q, v, a, dt, integ = _case(n)
+    us = {}
+    for sweeps in (1, 2, 4):
+        m = make(friction_sweeps=sweeps, friction_tol=0.0)
+        body = lambda c, m=m: (c[0], m.friction_update(integ.friction, c[1], c[1], dt, 0.0, c[0], c[2]), c[2])
+        us[sweeps] = _loop_time(body, (q, v, a), 500) * 1e6
+    text = jax.jit(lambda v, a: m.friction_update(integ.friction, v, v, dt, 0.0, q, a)).lower(v, a).compile().as_text()
+    sweep_body = re.search(r"while\(.*body=%?([\w.\-]+)", text).group(1)  # the one loop: the sweeps
+    per_sweep = (us[4] - us[2]) / 2
+    return [dict(n=n, us_1=us[1], us_2=us[2], us_4=us[4], per_sweep=per_sweep, rest=us[2] - 2 * per_sweep,
+                 sweep_kernels=kernels(hlo_computations(text), sweep_body))]
 
 
 def kernel_rows() -> list[dict]:

@@ -54,13 +54,8 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 
 
-def loop_kernels(compiled_text: str) -> dict:
-    """Kernels one pass of each loop runs, from the optimised HLO: for the step loop and one
-    friction sweep, the count of its body's
-    instructions that execute (fusions and unfused ops; not parameters, constants, tuples,
-    bitcasts). Zero where the compiled step has no friction loop (one sweep). The step loop is the
-    loop whose body holds the friction loops and nothing else: one (projected leapfrog) or two
-    (projected Verlet)."""
+def hlo_computations(compiled_text: str) -> dict[str, list[str]]:
+    """The optimised HLO's computations: name → its instructions (the text right of " = ")."""
     import re
 
     comps, cur = {}, None
@@ -70,10 +65,30 @@ def loop_kernels(compiled_text: str) -> dict:
             cur = comps[m.group(1)] = []
         elif cur is not None and line.startswith("  ") and " = " in line:
             cur.append(line.split(" = ", 1)[1])
-    skip = {"parameter", "constant", "get-tuple-element", "tuple", "bitcast"}
+    return comps
 
-    def ops(body):
-        return [re.search(r"\s([a-z\-]+)\(", " " + ins.split(" ", 1)[1]).group(1) for ins in comps[body]]
+
+def kernels(comps: dict[str, list[str]], computation: str) -> int:
+    """The instructions of `computation` (of `hlo_computations`) that execute as kernels: fusions and unfused ops (not
+    parameters, constants, tuples, bitcasts)."""
+    import re
+
+    skip = {"parameter", "constant", "get-tuple-element", "tuple", "bitcast"}
+    ops = [re.search(r"\s([a-z\-]+)\(", " " + ins.split(" ", 1)[1]).group(1)
+           for ins in comps[computation]]
+    return sum(o not in skip for o in ops)
+
+
+def loop_kernels(compiled_text: str) -> dict:
+    """Kernels one pass of each loop runs, from the optimised HLO: for the step loop and one
+    friction sweep, the count of its body's
+    instructions that execute (fusions and unfused ops; not parameters, constants, tuples,
+    bitcasts). Zero where the compiled step has no friction loop (one sweep). The step loop is the
+    loop whose body holds the friction loops and nothing else: one (projected leapfrog) or two
+    (projected Verlet)."""
+    import re
+
+    comps = hlo_computations(compiled_text)
 
     # with XLA's loop option a loop is wrapped in a call of its own (`xla_cpu_small_call`):
     # a loop's parent is the loop body that (through such calls) contains it
@@ -88,7 +103,7 @@ def loop_kernels(compiled_text: str) -> dict:
             loops[b] = caller[loops[b]]
     inner = {b: [c for c, parent in loops.items() if parent == b] for b in loops}
     out = dict(step_kernels=0, sweep_kernels=0)
-    count = lambda b: sum(o not in skip for o in ops(b))
+    count = lambda b: kernels(comps, b)
     for b in loops:
         # Verlet: two friction loops; leapfrog: one, smaller than the step around it (a one-sweep
         # step is itself a leaf loop, inside the saves' loop, which is smaller than it)
@@ -98,7 +113,7 @@ def loop_kernels(compiled_text: str) -> dict:
             out["sweep_kernels"] = count(inner[b][0])
     if not out["step_kernels"]:  # one sweep: the step is the innermost loop with a friction pass inline
         leaf = [b for b in loops if not inner[b]]
-        out["step_kernels"] = max(sum(o not in skip for o in ops(b)) for b in leaf)
+        out["step_kernels"] = max(count(b) for b in leaf)
     return out
 
 

@@ -80,10 +80,9 @@ def _node_constants(model, dtype):
     BA = jnp.asarray(~held_s[:, 2], dtype) / J[2] - A
     cl, cr = node_weights(model)
     sides = {}
-    for side, c in (("l", cl), ("r", cr)):
+    for side, shift, c in (("l", "left", cl), ("r", "right", cr)):
         rho = c.astype(dtype) * r
-        sides[side] = (rho, rho * _shift(A, "left" if side == "l" else "right"),
-                       _shift(BA, "left" if side == "l" else "right"))
+        sides[side] = (rho, rho * _shift(A, shift), _shift(BA, shift))
     return fm, sides
 
 
@@ -180,7 +179,6 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     def merge(even, odd, size):
         return jnp.stack([even, odd], 1).reshape((2 * M,) + even.shape[1:])[:size]
 
-    rows = table  # each colour's (fields, M): a field is a contiguous row
     fm, sides = _node_constants(model, dtype)
     const = [{}, {}]
     for name, value in (("fm", fm), ("rl", sides["l"][0]), ("rr", sides["r"][0]), ("kl", sides["l"][1]),
@@ -191,7 +189,7 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     def fields_of(c):
         """The colour-`c` fields by name, bounds for this step (read where they are used: inside
         the sweep loop, as a while loop's inputs are buffers, one kernel each per pass)."""
-        K = {k: rows[c][i] for i, k in enumerate(FIELDS)}
+        K = {k: table[c][i] for i, k in enumerate(FIELDS)}  # a field is a contiguous row
         K["active"] = K["active"] > 0
         K["bound_s"], K["bound_d"] = h * K["bound_s"], h * K["bound_d"]
         for side in "lr":
