@@ -160,9 +160,10 @@ class Tanh(AbstractFriction):
 
     def impulse_2d(self, u, W, bound_stick, bound_slip, guess=None):
         """The explicit smoothed impulse −`bound_slip`·tanh(|u|/ε)·u/|u| (never sticks)."""
-        x = safe_hypot(*u) / self.eps
+        eps = self.eps.astype(u[0].dtype)  # the pass may compute in float32
+        x = safe_hypot(*u) / eps
         small = x < 1e-4
         xs = jnp.where(small, 1.0, x)
         tanhc = jnp.where(small, 1.0 - x**2 / 3.0, jnp.tanh(xs) / xs)  # tanh(x)/x
-        k = -bound_slip * tanhc / self.eps
+        k = -bound_slip * tanhc / eps
         return (k * u[0], k * u[1]), jnp.zeros(x.shape, bool)

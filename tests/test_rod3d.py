@@ -176,6 +176,8 @@ def test_bad_arguments_name_the_argument():
         Rod3D(rod, 10, friction_sweeps=0)
     with pytest.raises(ValueError, match="friction_at"):
         Rod3D(rod, 10, friction_at="centre")
+    with pytest.raises(ValueError, match="friction_precision"):
+        Rod3D(rod, 10, friction_precision="float16")
     with pytest.raises(ValueError, match="speed"):
         Rod3D(rod, 10, control="displacement", speed=float("nan"))
 

@@ -11,7 +11,7 @@ from ..params import _concrete
 __all__ = ["check_arguments"]
 
 CHOICES = {"ends": ("pinned", "fork", "clamped", "free"), "control": ("force", "load", "displacement"),
-           "friction_at": ("surface", "axis")}
+           "friction_at": ("surface", "axis"), "friction_precision": ("float32", "float64")}
 # name: (lower bound, bound included, unit)
 RANGES = {"speed": (None, True, "m/s"), "preload": (None, True, "N"), "contact_damping": (0.0, True, "s/m"), "damping": (0.0, True, "1/s"),
           "contact_stiffness": (0.0, False, "N/m^2.5"), "rotary_scale": (1.0, True, "")}

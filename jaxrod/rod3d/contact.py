@@ -13,7 +13,7 @@ from . import components as c3
 from .energy import _penetration
 from .state import held_pattern
 
-__all__ = ["node_weights", "FIELDS", "friction_table", "friction_pass"]
+__all__ = ["node_weights", "FIELDS", "pass_dtype", "friction_table", "friction_pass"]
 
 # the friction pass's fields of each contact, rows of `friction_table`: the outward radius
 # e_r = (0, e1, e2), the tangent inverse mass W, the bounds per unit time, whether it is active,
@@ -21,6 +21,13 @@ __all__ = ["node_weights", "FIELDS", "friction_table", "friction_pass"]
 # along the segment's axis (`friction_table`)
 FIELDS = ("e1", "e2", "W11", "W12", "W22", "bound_s", "bound_d", "active", "dl1", "dl2", "dr1", "dr2",
           "Dlx", "Dly", "Dlz", "Drx", "Dry", "Drz")
+
+
+def pass_dtype(model, dtype):
+    """The dtype the friction pass computes in, for a state of `dtype`: float32 with
+    `model.friction_precision == "float32"` (its arrays half as wide: the pass is bound by the
+    arrays its kernels write and read), else the state's."""
+    return jnp.float32 if model.friction_precision == "float32" else dtype
 
 
 def _arm(model, dtype):
@@ -97,8 +104,8 @@ def friction_table(model, x, Q, N):
     the pass of a save; projected Verlet: the second pass of a step and the first of the next),
     so `Rod3D.accelerations` computes this once per position and the forces carry it. Two arrays
     (len(FIELDS), M), one per colour of the pass's red–black split: field, entry k for node
-    2k + c (padded nodes inert)."""
-    dtype = x.dtype
+    2k + c (padded nodes inert), in the pass's dtype (`pass_dtype`)."""
+    dtype = pass_dtype(model, x.dtype)
     if not model.channel:  # no wall, no contact: an inert table
         return (jnp.zeros((len(FIELDS), colours(model.n)), dtype),) * 2
     # a held node still touches the wall: its translation is prescribed (the support takes the
@@ -107,7 +114,8 @@ def friction_table(model, x, Q, N):
     # the end segments tilting, and a loaded rod buckles through that roll: issue [rod3d])
     fm, sides = _node_constants(model, dtype)
     _, (_, e1, e2) = _penetration(model, c3.unpack(x))
-    d3 = c3.unpack(Q[:, 2, :])  # each segment's axis in the lab frame
+    e1, e2, N = e1.astype(dtype), e2.astype(dtype), N.astype(dtype)
+    d3 = c3.unpack(Q[:, 2, :].astype(dtype))  # each segment's axis in the lab frame
     W11 = fm[0]
     W22 = fm[1] * e2**2 + fm[2] * e1**2
     W12 = jnp.zeros_like(W11)
@@ -128,8 +136,8 @@ def friction_table(model, x, Q, N):
     movable = (W11 * W22 - W12 * W12) > 0
     W11, W22, W12 = jnp.where(movable, W11, 1.0), jnp.where(movable, W22, 1.0), jnp.where(movable, W12, 0.0)
     in_contact = (N > 0) & movable
-    fields.update(e1=e1, e2=e2, W11=W11, W12=W12, W22=W22, bound_s=model.rod.mu_s * N,
-                  bound_d=model.rod.mu_d * N, active=in_contact.astype(dtype))
+    fields.update(e1=e1, e2=e2, W11=W11, W12=W12, W22=W22, bound_s=model.rod.mu_s.astype(dtype) * N,
+                  bound_d=model.rod.mu_d.astype(dtype) * N, active=in_contact.astype(dtype))
     # red–black, each colour an array of its own: node 2k + c is entry k of colour c (a padded
     # node is inert: W = 1, everything else 0)
     M = colours(model.n)
@@ -160,10 +168,16 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
 
     **Returns:** the new `(v, w, stuck, force, residual, sweeps)`: `force` the tangential friction
     force of each contact [N], `residual` the largest change of an impulse in the last sweep over
-    the largest bound, `sweeps` the sweeps taken."""
-    dtype = v.dtype
+    the largest bound, `sweeps` the sweeps taken.
+
+    The pass computes in `pass_dtype` (the table's): it casts the velocities, spins, directors,
+    forces and h in, and adds its changes of v and w to the state's arrays (a node without
+    contact keeps its velocity exactly)."""
+    state_dtype = v.dtype
     if not model.channel:  # no wall, no contact, no friction
-        return v, w, stuck, jnp.zeros_like(force), jnp.zeros((), dtype), jnp.zeros((), dtype)
+        return v, w, stuck, jnp.zeros_like(force), jnp.zeros((), state_dtype), jnp.zeros((), state_dtype)
+    dtype = table[0].dtype
+    h = jnp.asarray(h).astype(dtype)
     # node 2k + c is entry k of colour c, and so is segment 2k + c. Even node k has segments
     # 2k − 1 (odd k − 1) and 2k (even k) on its left and right, odd node k has segments 2k (even
     # k) and 2k + 1 (odd k): a half sweep solves only its own contacts.
@@ -234,7 +248,7 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
                         jnp.finfo(dtype).tiny)
     # warm start: last pass's forces, within this pass's bounds
     stucks = split(stuck, False)
-    p0 = split3((force[:, 0] * h, force[:, 1] * h))
+    p0 = split3((force[:, 0].astype(dtype) * h, force[:, 1].astype(dtype) * h))
     p0 = list(p0)
     for c in (0, 1):
         K = node[c]
@@ -242,9 +256,10 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
         norm = safe_hypot(*p0[c])
         k = jnp.where(K["active"] & (norm > cap), cap / jnp.where(norm > 0, norm, 1.0), 1.0)  # no 0·∞ in a jvp
         p0[c] = tuple(jnp.where(K["active"], k * p, 0.0) for p in p0[c])
-    vs = list(split3(c3.unpack(v)))
-    Qr = c3.unpack_matrix(Q)
-    om0 = c3.rmatvec(Qr, c3.unpack(w))  # the spins in the lab frame, ω = Qᵀw
+    v_in = split3(tuple(a.astype(dtype) for a in c3.unpack(v)))
+    vs = list(v_in)
+    Qr = c3.unpack_matrix(Q.astype(dtype))
+    om0 = c3.rmatvec(Qr, tuple(a.astype(dtype) for a in c3.unpack(w)))  # the spins in the lab frame, ω = Qᵀw
     om = split3(om0)
     for c in (0, 1):
         vs[c], om = apply(node, c, vs[c], om, p0[c])
@@ -269,9 +284,11 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
             p_acc[c], stucks[c] = p, K["active"] & sticks
         return tuple(vs), om, tuple(stucks), tuple(p_acc), change / scale, k + 1
 
+    tol = model.friction_tol.astype(dtype)
+
     def more(carry):
         k = carry[-1]
-        return (k == 0) | ((k < model.friction_sweeps) & (carry[-2] > model.friction_tol))
+        return (k == 0) | ((k < model.friction_sweeps) & (carry[-2] > tol))
 
     carry = (tuple(vs), om, stucks, tuple(p0), jnp.zeros((), dtype), 0)
     if model.friction_sweeps == 1:  # no loop: reverse-mode differentiable
@@ -282,10 +299,11 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
         carry = jax.lax.while_loop(more, sweep, carry)
     vs, om, stucks, p_acc, residual, sweeps = carry
     n1 = model.n + 1
-    v = jnp.stack([merge(vs[0][k], vs[1][k], n1) for k in range(3)], -1)
+    d_v = tuple(merge(vs[0][k] - v_in[0][k], vs[1][k] - v_in[1][k], n1) for k in range(3))
+    v = v + c3.pack(d_v).astype(state_dtype)
     d_om = tuple(merge(om[0][k], om[1][k], model.n) - om0[k] for k in range(3))
-    w = w + c3.pack(c3.matvec(Qr, d_om))  # back to the material frame: w + Q Δω
+    w = w + c3.pack(c3.matvec(Qr, d_om)).astype(state_dtype)  # back to the material frame: w + Q Δω
     force = jnp.stack([merge(p_acc[0][a], p_acc[1][a], n1) for a in range(2)], -1) / jnp.where(h > 0, h, 1.0)
     any_contact = jnp.any(node[0]["active"]) | jnp.any(node[1]["active"])
-    return (v, w, merge(*stucks, n1), force, jnp.where(any_contact, residual, 0.0),
-            jnp.asarray(sweeps, dtype))
+    return (v, w, merge(*stucks, n1), force.astype(state_dtype), jnp.where(any_contact, residual, 0.0).astype(state_dtype),
+            jnp.asarray(sweeps, state_dtype))
