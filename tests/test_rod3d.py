@@ -323,3 +323,30 @@ def test_vector_coulomb_impulse_minimises_the_kinetic_energy_over_the_disc():
         np.testing.assert_allclose(np.linalg.norm(pg[slip], axis=1), c[slip], rtol=1e-12)
         if tol is not None:
             assert (np.linalg.norm(pg[slip] - p[slip], axis=1) / c[slip]).max() < tol
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_amplitude_is_the_largest_wall_angle(seed):
+    """`amplitude` (one arctangent of the largest half-angle tangent) against max|θ| of every
+    interior node by `wall_angle` (an arctangent each): nodes anywhere in the clearance circle,
+    on its wall, near the top (θ → ±π) and exactly on the ray above the axis (θ = π)."""
+    rng = np.random.default_rng(seed)
+    rod = jr.RodChannel.reference(0.3)
+    m = Rod3D(rod, 12)
+    q, _ = m.initial_state()
+    R = float(rod.R)
+    angle = rng.uniform(-np.pi, np.pi, m.n + 1)
+    radius = R * rng.uniform(0.2, 1.1, m.n + 1)
+    yz = np.stack([radius * np.sin(angle), -radius * np.cos(angle)], 1)
+    cases = [yz, yz * np.array([1e-3, 1.0])]  # all near the bottom: small θ, full relative precision
+    top = yz.copy()
+    top[5] = (1e-12, R)  # next to the top, |θ| just below π
+    cases.append(top)
+    over = yz.copy()
+    over[3] = (0.0, 0.7 * R)  # on the ray above the axis: θ = π
+    cases.append(over)
+    for c in cases:
+        x = q.x.at[:, 1:].set(jnp.asarray(c))
+        qc = type(q)(x, q.Q)
+        expected = float(jnp.max(jnp.abs(m.theta(x)[1:-1])))
+        assert float(m.amplitude(qc)) == pytest.approx(expected, rel=1e-15, abs=0)
