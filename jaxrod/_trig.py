@@ -21,7 +21,7 @@ import math
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-__all__ = ["sincos", "atan2"]
+__all__ = ["sincos", "atan2", "rodrigues"]
 
 # π/2 in three parts of 33 bits (fdlibm's pio2_1, pio2_2 and pio2_2t): k·part is exact for |k| < 2²⁰
 _PIO2 = (1.57079632673412561417e00, 6.07710050630396597660e-11, 2.02226624879595063154e-21)
@@ -61,6 +61,21 @@ def sincos(x: Float[Array, "..."]) -> tuple[Float[Array, "..."], Float[Array, ".
     swap = (quadrant == 1.0) | (quadrant == 3.0)
     s, c = jnp.where(swap, cos_r, sin_r), jnp.where(swap, sin_r, cos_r)
     return jnp.where(quadrant >= 2.0, -s, s), jnp.where((quadrant == 1.0) | (quadrant == 2.0), -c, c)
+
+
+def rodrigues(theta2: Float[Array, "..."]) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
+    """(sin θ/θ, (1 − cos θ)/θ²) from θ² ≥ 0, elementwise: the coefficients of Rodrigues'
+    formula for a rotation vector of angle θ, with no square root, division or range reduction.
+    fdlibm's kernels give s = sin x/x and c = cos x at x = θ/4; twice the double angle then gives
+    sin 2x/2x = s c, cos 2x = 1 − 2x²s², sin θ/θ = (sin 2x/2x) cos 2x and (1 − cos θ)/θ² =
+    ½ (sin 2x/2x)². Within a few units in the last place for θ ≤ π, where x stays in the kernels'
+    range |x| ≤ π/4 (tests/test_trig.py); beyond, they are polynomials outside it (error 2e-11 at
+    θ = 2π): meant for the rotation of one time step, which turns a segment by far less."""
+    x2 = jnp.asarray(theta2) / 16.0
+    s = 1.0 + x2 * _horner(x2, _S[::-1])
+    c = (1.0 - 0.5 * x2) + x2 * x2 * _horner(x2, _C[::-1])
+    s2 = s * c
+    return s2 * (1.0 - 2.0 * x2 * s * s), 0.5 * s2 * s2
 
 
 def atan2(y: Float[Array, "..."], x: Float[Array, "..."]) -> Float[Array, "..."]:

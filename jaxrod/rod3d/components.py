@@ -13,7 +13,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from .._numerics import computed_once
-from .._trig import atan2, sincos
+from .._trig import atan2, rodrigues, sincos
 
 __all__ = ["unpack", "pack", "unpack_matrix", "pack_matrix", "dot", "cross", "add", "sub", "scale",
            "matvec", "rmatvec", "rotate", "log_rotation", "left_jacobian_inv_t", "relative_rotation"]
@@ -69,15 +69,11 @@ def rmatvec(A, b):
 
 
 def rotate(phi, A):
-    """exp([φ]×) A, column by column (Rodrigues: A_c + a φ × A_c + b φ × (φ × A_c)), with the
-    series of `jaxrod.rod3d.so3.exp_so3` below |φ| = 1e-4 rad (sine and cosine: `jaxrod._trig`)."""
+    """exp([φ]×) A, column by column (Rodrigues: A_c + a φ × A_c + b φ × (φ × A_c), a = sin θ/θ,
+    b = (1 − cos θ)/θ², θ = |φ|: `jaxrod._trig.rodrigues`, to rounding for θ ≤ π: the drift's
+    rotation of one step, θ = h|ω|)."""
     th2 = dot(phi, phi)
-    small = th2 < 1e-8
-    ths = jnp.sqrt(jnp.where(small, 1.0, th2))
-    sin, cos = sincos(ths)
-    a = jnp.where(small, 1.0 - th2 / 6.0, sin / ths)
-    b = jnp.where(small, 0.5 - th2 / 24.0, (1.0 - cos) / ths**2)
-    a, b = computed_once((a, b), th2)  # read by all nine entries
+    a, b = computed_once(rodrigues(th2), th2)  # read by all nine entries
     cols = []
     for c in range(3):
         col = (A[0][c], A[1][c], A[2][c])
