@@ -76,12 +76,10 @@ class Rod3D(AbstractModel):
     - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
       models assume) (static).
-    - `friction_precision`: `"float32"` (default) or `"float64"`, the dtype the friction pass
-      computes in (static); it adds its changes of v and w to the state, whose positions and forces
-      stay float64. float32 makes a 500-segment step 15 % cheaper and moves a run's amplitude by
-      ~1e-6 relative (benchmarks/README.md); it resolves impulses to ~1e-7 of the bound, so a
-      `friction_tol` below ~1e-6 runs every pass to `friction_sweeps`. `"float64"` gives the
-      results of earlier versions to rounding.
+    - `friction_precision`: `"float32"` (default) or `"float64"` (earlier results to rounding), the
+      dtype of the friction pass (static; positions and forces stay float64, docs/physics.md §7):
+      a 500-segment step 15 % cheaper, amplitudes moved ~1e-6 relative; impulses resolved to ~1e-7
+      of the bound, so a `friction_tol` below ~1e-6 runs every pass to `friction_sweeps`.
     - `body_force`: extra force per length [N/m], a 3-vector (default 0).
     - `gravity`: include gravity (static, default True).
     """
