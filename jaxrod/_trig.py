@@ -21,7 +21,7 @@ import math
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-__all__ = ["sincos", "atan2", "rodrigues"]
+__all__ = ["sincos", "atan2", "rodrigues", "atan_sqrt"]
 
 # π/2 in three parts of 33 bits (fdlibm's pio2_1, pio2_2 and pio2_2t): k·part is exact for |k| < 2²⁰
 _PIO2 = (1.57079632673412561417e00, 6.07710050630396597660e-11, 2.02226624879595063154e-21)
@@ -76,6 +76,28 @@ def rodrigues(theta2: Float[Array, "..."]) -> tuple[Float[Array, "..."], Float[A
     c = (1.0 - 0.5 * x2) + x2 * x2 * _horner(x2, _C[::-1])
     s2 = s * c
     return s2 * (1.0 - 2.0 * x2 * s * s), 0.5 * s2 * s2
+
+
+def atan_sqrt(z: Float[Array, "..."]) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
+    """(A, C) from z = t² ≥ 0, elementwise: A = atan(t)/t and C = (1 − A)/(zA²) (1/3 at z = 0):
+    the coefficients of a rotation's logarithm from the squared tangent of its half angle
+    (`jaxrod.rod3d.components.log_rotation`). For t ≤ 0.66 (z ≤ 0.4356) Cephes' rational
+    arctangent in z itself, A = 1 + z·r(z) and C = −r/A², with no square root and no
+    cancellation; beyond, Cephes' reductions atan t = π/4 + atan((t − 1)/(t + 1)) (t ≤ 1 + √2)
+    and π/2 − atan(1/t). Within a few units in the last place (tests/test_trig.py); finite with
+    finite derivatives at z = 0. The polynomials are evaluated in z's own dtype."""
+    z = jnp.asarray(z)
+    near, far = z <= 0.66**2, z > 3.0 + 2.0 * math.sqrt(2.0)  # tan(3π/8)² = (1 + √2)²
+    t = jnp.sqrt(jnp.where(near, 1.0, z))
+    num, den = jnp.where(far, -1.0, t - 1.0), jnp.where(far, t, t + 1.0)
+    x = num / den  # the reduced argument away from 0
+    zx = jnp.where(near, z, x * x)
+    r = _horner(zx, _P) / _horner(zx, (1.0,) + _Q)
+    ax = 1.0 + zx * r  # atan(x)/x
+    offset = jnp.where(far, math.pi / 2 + _MOREBITS, math.pi / 4 + 0.5 * _MOREBITS)
+    A = jnp.where(near, ax, (offset + x * ax) / t)
+    zs = jnp.where(z > 0, z, 1.0)
+    return A, jnp.where(near, -r * zs, 1.0 - A) / (zs * A * A)
 
 
 def atan2(y: Float[Array, "..."], x: Float[Array, "..."]) -> Float[Array, "..."]:

@@ -1,13 +1,14 @@
 """`jaxrod._trig`: the vectorised sine, cosine and arctangent agree with the C library to 2 units
 in the last place over the ranges the rod uses and beyond (float64; other dtypes go to `jnp`,
 checked as well), keep the library's special values, and differentiate to the exact
-derivatives; Rodrigues' coefficients agree with an extended-precision reference."""
+derivatives; Rodrigues' coefficients and the logarithm's half-angle coefficients agree with an
+extended-precision reference."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxrod._trig import atan2, rodrigues, sincos
+from jaxrod._trig import atan2, atan_sqrt, rodrigues, sincos
 
 
 def _ulps(got, ref, dtype):
@@ -87,3 +88,29 @@ def test_rodrigues_coefficients_match_extended_precision():
     # smooth through θ = 0: d(sin θ/θ)/d(θ²) = −1/6, d((1 − cos θ)/θ²)/d(θ²) = −1/24
     da, db = (jax.grad(lambda t, k=k: rodrigues(t)[k])(0.0) for k in (0, 1))
     np.testing.assert_allclose([da, db], [-1 / 6, -1 / 24], rtol=1e-14)
+
+
+def test_half_angle_coefficients_match_extended_precision():
+    """A = atan(t)/t and C = (1 − A)/(t²A²) from z = t², against numpy's long double, through
+    all three of Cephes' ranges (t ≤ 0.66, ≤ 1 + √2, beyond) and their borders: A within 4 units
+    in the last place, C within 8 (its long-double reference takes (1 − A)/t² from its series
+    Σ (−t²)ᵏ/(2k + 3) below t = 0.1, where 1 − A cancels); C → 1/3 at z = 0 with finite
+    derivatives there."""
+    rng = np.random.default_rng(4)
+    borders = np.array([0.66, np.sqrt(2) + 1])
+    t = np.concatenate([rng.uniform(0, 3, 20000), 10.0 ** rng.uniform(-12, 6, 5000),
+                        np.outer(borders, 1 + np.linspace(-1e-12, 1e-12, 41)).ravel(), [0.0]])
+    z = (t * t).astype(np.float64)
+    tl = np.sqrt(z.astype(np.longdouble))
+    safe = np.where(tl > 0, tl, 1)
+    a_ref = np.where(tl > 0, np.arctan(safe) / safe, 1)
+    c_big = (1 - a_ref) / (safe**2 * a_ref**2)
+    c_series = sum((-tl * tl) ** k / (2 * k + 3) for k in range(16)) / a_ref**2
+    c_ref = np.where(tl < 0.1, c_series, c_big)
+    A, C = jax.jit(atan_sqrt)(jnp.asarray(z))
+    assert _ulps(A, a_ref.astype(np.float64), np.float64).max() <= 4.0
+    assert _ulps(C, c_ref.astype(np.float64), np.float64).max() <= 8.0
+    dA, dC = (jax.grad(lambda x, k=k: atan_sqrt(x)[k])(0.0) for k in (0, 1))
+    # A = 1 − z/3 + z²/5 − …, C = (1/3 − z/5 + …)(1 + 2z/3 + …) = 1/3 + (2/9 − 1/5) z + …
+    # (the rational approximation's z² coefficient is Cephes' fit: 7e-12 off 1/5 in dC)
+    np.testing.assert_allclose([dA, dC], [-1 / 3, 2 / 9 - 1 / 5], rtol=1e-10)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from .._numerics import computed_once
-from .._trig import atan2, rodrigues, sincos
+from .._trig import atan_sqrt, rodrigues
 
 __all__ = ["unpack", "pack", "unpack_matrix", "pack_matrix", "dot", "cross", "add", "sub", "scale",
            "matvec", "rmatvec", "rotate", "log_rotation", "left_jacobian_inv_t", "relative_rotation"]
@@ -87,31 +87,26 @@ def relative_rotation(A, B):
     return tuple(tuple(dot(A[a], B[c]) for c in range(3)) for a in range(3))
 
 
-def log_rotation(R, with_trig: bool = False):
-    """The rotation vector ψ of R (as rows), as `jaxrod.rod3d.so3.log_so3`; with `with_trig`,
-    also (sin θ, cos θ) of its angle θ = |ψ| (from R itself: no sine or cosine evaluated)."""
+def log_rotation(R, with_jacobian: bool = False):
+    """The rotation vector ψ of R (as rows), as `jaxrod.rod3d.so3.log_so3`, for angles θ < π;
+    with `with_jacobian`, also the coefficient c(θ) of `left_jacobian_inv_t`.
+
+    From the half angle: with s = vee(R) = sin θ·n and cos θ = (tr R − 1)/2, t = tan(θ/2) =
+    |s|/(1 + cos θ), so z = t² needs no square root; then ψ = 2 atan(t)·n = 2A/(1 + cos θ)·s
+    and c(θ) = 1/θ² − (1 + cos θ)/(2θ sin θ) = (1 − A)/(4zA²) = C/4 with (A, C) =
+    `jaxrod._trig.atan_sqrt(z)`: no sine, cosine, arctangent or division by θ, and finite
+    derivatives at the identity. To rounding up to θ ≈ 3 rad; nearer π, 1 + cos θ loses digits
+    (1e-14 relative at 3.1 rad), far beyond any joint of a rod that resolves its shape."""
     s = (0.5 * (R[2][1] - R[1][2]), 0.5 * (R[0][2] - R[2][0]), 0.5 * (R[1][0] - R[0][1]))
-    c = 0.5 * (R[0][0] + R[1][1] + R[2][2] - 1.0)
-    s2 = dot(s, s)
-    small = s2 < 1e-6
-    sns = jnp.sqrt(jnp.where(small, 1.0, s2))
-    factor = jnp.where(small, 1.0 + s2 / 6.0 + 3.0 * s2**2 / 40.0, atan2(sns, c) / sns)
-    if not with_trig:
-        return scale(factor, s)
-    r = jnp.sqrt(s2 + c * c)  # 1 for an exact rotation; normalise rounding away
-    return scale(factor, s), (jnp.sqrt(s2) / r, c / r)
+    u = 2.0 / (R[0][0] + R[1][1] + R[2][2] + 1.0)  # 1/(1 + cos θ), as tr R = 1 + 2 cos θ
+    A, C = atan_sqrt(dot(s, s) * u * u)
+    psi = scale(2.0 * u * A, s)
+    return (psi, 0.25 * C) if with_jacobian else psi
 
 
-def left_jacobian_inv_t(psi, m, trig=None):
-    """J_l(ψ)⁻ᵀ m = m + ½ ψ × m + c(θ) ψ × (ψ × m), c = 1/θ² − (1 + cos θ)/(2θ sin θ), θ = |ψ|
-    (series 1/12 + θ²/720 + θ⁴/30240 below θ = 1e-2): the gradient of m · log(exp([δ]×) R)
-    with respect to δ at δ = 0, for ψ = log R (a left perturbation of R). `trig`: (sin θ, cos θ)
-    if known (`log_rotation(R, with_trig=True)`), else evaluated."""
-    th2 = dot(psi, psi)
-    small = th2 < 1e-4
-    ths = jnp.sqrt(jnp.where(small, 1.0, th2))
-    sin, cos = sincos(ths) if trig is None else trig
-    c = jnp.where(small, 1.0 / 12.0 + th2 / 720.0 + th2**2 / 30240.0,
-                  1.0 / ths**2 - (1.0 + cos) / (2.0 * ths * jnp.where(small, 1.0, sin)))
-    pm = computed_once(cross(psi, m), th2)  # read by every component of the result
+def left_jacobian_inv_t(psi, m, c):
+    """J_l(ψ)⁻ᵀ m = m + ½ ψ × m + c ψ × (ψ × m), c = c(θ) = 1/θ² − (1 + cos θ)/(2θ sin θ) for
+    θ = |ψ| (from `log_rotation(R, with_jacobian=True)`): the gradient of m · log(exp([δ]×) R)
+    with respect to δ at δ = 0, for ψ = log R (a left perturbation of R)."""
+    pm = computed_once(cross(psi, m), psi[0])  # read by every component of the result
     return add(m, add(scale(0.5, pm), scale(c, cross(psi, pm))))

@@ -131,9 +131,9 @@ def _conservative(model, X, Qr):
     upper = tuple(tuple(q[1:] for q in row) for row in Qr)
     lower = tuple(tuple(q[:-1] for q in row) for row in Qr)
     R = c3.relative_rotation(upper, lower)
-    psi, trig = c3.log_rotation(R, with_trig=True)
-    psi = computed_once(psi, R[0][0])  # read by the couple's three components and Rᵀg
-    g = c3.left_jacobian_inv_t(psi, (rod.EI * psi[0] / l0, rod.EI * psi[1] / l0, rod.GJ * psi[2] / l0), trig)
+    psi, cj = c3.log_rotation(R, with_jacobian=True)
+    *psi, cj = computed_once((*psi, cj), R[0][0])  # read by the couple's three components and Rᵀg
+    g = c3.left_jacobian_inv_t(psi, (rod.EI * psi[0] / l0, rod.EI * psi[1] / l0, rod.GJ * psi[2] / l0), cj)
     g = computed_once(g, psi[0])  # read by the torques of both segments of a joint
     Rg = c3.rmatvec(R, g)
     tau = (c3.pack(tau) + jnp.pad(c3.pack(g), ((1, 0), (0, 0)))) - jnp.pad(c3.pack(Rg), ((0, 1), (0, 0)))
