@@ -178,14 +178,16 @@ def forces(model, x, Q, v):
 
 def impulse_work(model, v_prev, v_trial, v_after, a, h):
     """`(lost, work_in)` over a half step `h`: the energy removed by the friction impulse
-    (impulse · mean velocity, the reduced models' midpoint rule) and by damping, and the work of
-    the pushed end (its support force times its prescribed velocity) [J]."""
+    (impulse · mean velocity, the reduced models' midpoint rule) and by damping, per node and
+    component and per segment and axis (`(n+1, 3)` and `(n, 3)` arrays [J], whose sum is the
+    total: the run accumulates them elementwise and sums at its saves, so a step has no
+    reduction), and the work of the pushed end (its support force times its prescribed
+    velocity) [J]."""
     mean_v = 0.5 * (v_prev.v + v_after.v)
-    lost = (jnp.sum(model.mass[:, None] * (v_trial.v - v_after.v) * mean_v)
-            + jnp.sum(model.inertia[None, :] * (v_trial.w - v_after.w) * 0.5 * (v_prev.w + v_after.w))
-            - h * jnp.sum(a.fd * mean_v))
+    lost = (model.mass[:, None] * (v_trial.v - v_after.v) * mean_v - h * a.fd * mean_v,
+            model.inertia[None, :] * (v_trial.w - v_after.w) * 0.5 * (v_prev.w + v_after.w))
     if model.control == "displacement":
         work_in = -h * a.f[-1, 0] * v_after.v[-1, 0]
     else:
-        work_in = jnp.zeros_like(lost)
+        work_in = jnp.zeros((), v_prev.v.dtype)
     return lost, work_in
