@@ -1,4 +1,5 @@
-"""Sine, cosine and two-argument arctangent as polynomials that XLA vectorises on the CPU.
+"""Sine, cosine and arctangents as polynomials that XLA vectorises on the CPU, and the
+coefficients of a rotation's exponential (`rodrigues`) and logarithm (`atan_sqrt`) built on them.
 
 XLA on the CPU evaluates `jnp.sin`, `jnp.cos` and `jnp.arctan2` in float64 one element at a
 time through the C library: measured on the 2-core CPU of the benchmarks, 10, 10 and 14 ns per
@@ -10,8 +11,9 @@ three-part Cody–Waite reduction by π/2, exact for |x| < 2²⁰·π/2; arctang
 approximation with its reduction to |t| ≤ 0.66), written with elementwise operations only, so
 that they fuse with their neighbours and vectorise: within 2 units in the last place of the
 library functions (tests/test_trig.py), differentiable (their derivatives are those of the
-polynomials, within a few ulp of the exact ones). The constants are float64's: arrays of any
-other dtype go to `jnp.sin`, `jnp.cos` and `jnp.arctan2` (XLA vectorises float32 itself).
+polynomials, within a few ulp of the exact ones). The constants are float64's: `sincos` and
+`atan2` hand arrays of any other dtype to `jnp.sin`, `jnp.cos` and `jnp.arctan2` (XLA vectorises
+float32 itself); `rodrigues` and `atan_sqrt` evaluate their polynomials in the input's dtype.
 """
 
 from __future__ import annotations
