@@ -36,9 +36,11 @@ def test_each_model_through_simulate_under_jit_and_vmap_equals_its_single_runs(k
         one = scene(a).run(t1=t1, n_save=21)
         assert int(one.result) == 0 and bool(batch.buckled[i]) == bool(one.buckled)
         assert int(batch.n_steps[i]) == int(one.n_steps)
-        # the 3D rod's batched 3×3 products and its friction sweeps round differently from the
-        # unbatched run's (1.2e-12 measured); the reduced models agree to 1e-12
-        np.testing.assert_allclose(batch.amplitude[i], one.amplitude, rtol=1e-10 if kind == "rod3d" else 1e-12,
+        # the 3D rod's friction pass computes in float32, and the batched compilation rounds
+        # differently from the unbatched one (1.6e-7 measured; 1.2e-12 before the pass was float32):
+        # within the pass's stated budget, 1e-5 of the amplitude (README, "Cost of a step").
+        # The reduced models agree to 1e-12
+        np.testing.assert_allclose(batch.amplitude[i], one.amplitude, rtol=1e-5 if kind == "rod3d" else 1e-12,
                                    atol=1e-300)
         np.testing.assert_allclose(batch.t_stop[i], one.t_stop, rtol=1e-12)
         # the energy balance closes for every model (E + dissipated − work_in constant)

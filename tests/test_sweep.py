@@ -166,7 +166,8 @@ def test_ensemble_probability_with_confidence_interval():
 def test_rod3d_sweep_matches_single_runs_and_flags_bad_members():
     """The 3D rod in a sweep (continuous batching, the one engine): each valid member is the run
     `jaxrod.simulate` gives for the same dead load, perturbation and step (same steps, same
-    stop; amplitudes to 1e-12); an invalid member gets its code and disturbs nobody."""
+    stop; amplitudes within the float32 friction pass's budget); an invalid member gets its code
+    and disturbs nobody."""
     from jaxrod.rod3d import Rod3D
 
     spec = SweepSpec(model="rod3d", n=12, perturbation="sine", t1=0.04, dF=5.0)
@@ -184,8 +185,10 @@ def test_rod3d_sweep_matches_single_runs_and_flags_bad_members():
         integ = jr.integrators.default_for(model, res.meta["dt"])  # the 3D rod's scheme, as the sweep
         sol = jr.simulate(model, integ, q0, v0, 0.04, n_save=201, options=opts, throw=False)
         assert bool(sol.buckled) == bool(res.outputs["buckled"][i])
-        # batched 3×3 products and reductions round differently from the unbatched run's
-        np.testing.assert_allclose(res.outputs["max_theta"][i], float(jnp.max(sol.amplitude)), rtol=1e-12)
+        # the sweep's compilation rounds the float32 friction pass differently from the single
+        # run's (3.9e-10 measured; within 1e-12 before the pass was float32): within its budget,
+        # 1e-5 of the amplitude (README, "Cost of a step")
+        np.testing.assert_allclose(res.outputs["max_theta"][i], float(jnp.max(sol.amplitude)), rtol=1e-5)
         assert res.outputs["t_buckle"][i] == float(sol.t_buckle)
         assert res.outputs["steps"][i] == int(sol.n_steps)
     assert not res.outputs["buckled"][0] and res.outputs["buckled"][2]
