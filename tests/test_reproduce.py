@@ -102,3 +102,26 @@ def test_quick_reproduction_of_e2_and_e3(tmp_path):
         assert (tmp_path / f).stat().st_size > 0, f
     assert math.isfinite(res["e3"]["boundary_exponent"]) and res["e3"]["boundary_exponent"] < 0
     assert res["e3"]["frictionless_buckles_for_every_dF_gt_0"] is True
+
+
+def test_e4_row_statistics_skip_failed_realizations_without_warnings():
+    """E4's mean and spread over the realizations whose search found a root equal numpy's
+    nanmean/nanstd (ddof 1), and a μ where none did gives NaN silently (the tiny run hits it)."""
+    import warnings
+
+    import numpy as np
+
+    from jaxrod.experiments.e4 import _row_stats
+
+    nan = np.nan
+    F = np.array([[1.0, 2.0, nan], [nan, nan, nan], [3.0, nan, nan], [1.0, 2.0, 4.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mean, std = _row_stats(F)
+        one = _row_stats(np.array([[2.0], [nan]]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        np.testing.assert_array_equal(mean, np.nanmean(F, axis=1))
+        np.testing.assert_allclose(std, np.nanstd(F, axis=1, ddof=1), rtol=1e-15)
+    np.testing.assert_array_equal(one[0], [2.0, nan])
+    np.testing.assert_array_equal(one[1], [0.0, 0.0])
