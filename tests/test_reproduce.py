@@ -104,24 +104,29 @@ def test_quick_reproduction_of_e2_and_e3(tmp_path):
     assert res["e3"]["frictionless_buckles_for_every_dF_gt_0"] is True
 
 
-def test_e4_row_statistics_skip_failed_realizations_without_warnings():
-    """E4's mean and spread over the realizations whose search found a root equal numpy's
-    nanmean/nanstd (ddof 1), and a μ where none did gives NaN silently (the tiny run hits it)."""
+def test_statistics_over_realizations_skip_failed_ones_without_warnings():
+    """E4's and E5's mean and spread over the realizations that succeeded equal numpy's
+    nanmean/nanstd (ddof 1 and 0), and a μ where none did gives NaN silently (the tiny run hits
+    it in E4)."""
     import warnings
 
     import numpy as np
 
-    from jaxrod.experiments.e4 import _row_stats
+    from jaxrod.experiments._stats import finite_mean_std
 
     nan = np.nan
     F = np.array([[1.0, 2.0, nan], [nan, nan, nan], [3.0, nan, nan], [1.0, 2.0, 4.0]])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        mean, std = _row_stats(F)
-        one = _row_stats(np.array([[2.0], [nan]]))
+        mean, std = finite_mean_std(F)
+        _, std0 = finite_mean_std(F, ddof=0)
+        one = finite_mean_std(np.array([[2.0], [nan]]))
+        row = finite_mean_std(F[0])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         np.testing.assert_array_equal(mean, np.nanmean(F, axis=1))
         np.testing.assert_allclose(std, np.nanstd(F, axis=1, ddof=1), rtol=1e-15)
+        np.testing.assert_allclose(std0, np.nanstd(F, axis=1), rtol=1e-15)
     np.testing.assert_array_equal(one[0], [2.0, nan])
-    np.testing.assert_array_equal(one[1], [0.0, 0.0])
+    np.testing.assert_array_equal(one[1], [nan, nan])
+    np.testing.assert_allclose(row, (1.5, np.sqrt(0.5)), rtol=1e-15)

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..output import subplots, write_csv
 from ..params import RodChannel
+from ._stats import finite_mean_std
 
 __all__ = ["convergence", "dominant_modes_at", "SIZES"]
 
@@ -88,8 +89,8 @@ def convergence(out, quick=False, progress=True, max_dF: float = 300.0):
                                      dominant_mode=modes[i, r]))
         ns = np.array([n for n, _, _ in per_n])
         for i, mu in enumerate(mus):
-            dF = np.array([np.nanmean(roots[i]) for _, roots, _ in per_n])
-            md = np.array([np.nanmean(modes[i]) for _, _, modes in per_n])
+            dF = np.array([finite_mean_std(roots[i])[0] for _, roots, _ in per_n])
+            md = np.array([finite_mean_std(modes[i])[0] for _, _, modes in per_n])
             res[f"{kind}, mu={mu:g}"] = {
                 "n": ns.tolist(), "dF_star_mean": dF.tolist(),
                 "dF_star": [roots[i].tolist() for _, roots, _ in per_n],

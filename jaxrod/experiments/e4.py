@@ -12,6 +12,7 @@ from .. import theory
 from ..output import subplots, write_csv
 from ..params import RodChannel
 from ._settings import _settings
+from ._stats import finite_mean_std
 
 __all__ = ['e4']
 
@@ -24,19 +25,6 @@ def _fit(x, y):
     if ok.sum() < 2:
         return math.nan, math.nan, math.nan
     return fit_power_law(x[ok], y[ok])
-
-
-def _row_stats(F):
-    """Mean and sample standard deviation of each row's finite entries (the realizations whose
-    search found a root): NaN where a row has none (the mean) or fewer than two (the deviation;
-    0 for a single realization per row), without numpy's empty-slice warnings."""
-    ok = np.isfinite(F)
-    count = ok.sum(axis=1)
-    mean = np.where(count > 0, np.where(ok, F, 0.0).sum(axis=1) / np.maximum(count, 1), np.nan)
-    if F.shape[1] == 1:
-        return mean, np.zeros_like(mean)
-    sq = np.where(ok, (F - mean[:, None]) ** 2, 0.0).sum(axis=1)
-    return mean, np.where(count > 1, np.sqrt(sq / np.maximum(count - 1, 1)), np.nan)
 
 
 def _frictionless_dF(s, amplitude, perturbation):
@@ -109,7 +97,8 @@ def e4(out, quick, progress):
         rr, _ = critical_load_curve(mus, amp, perturbation=kind, realizations=reals, seed=4, n=n_case,
                                     t1=s["t1"], bracket=(1e-3, s["max_dF"]), rtol=1e-4)
         F = np.where(np.asarray(rr.result) == 0, np.asarray(rr.root), np.nan)
-        mean, std = _row_stats(F)
+        mean, std = finite_mean_std(F)
+        std = std if reals > 1 else np.zeros_like(mean)
         p, se, c = _fit(mus, mean)
         free, free_code = _frictionless_dF(s, amp, kind)
         entry = {"n": n_case, "dF_star": mean.tolist(), "dF_star_std": std.tolist(), "exponent": p, "exponent_stderr": se,

@@ -11,6 +11,7 @@ from .. import theory
 from ..output import subplots, write_csv
 from ..params import RodChannel
 from ._settings import _settings
+from ._stats import finite_mean_std
 from .convergence import convergence, dominant_modes_at
 
 __all__ = ['e5']
@@ -38,10 +39,10 @@ def e5(out, quick, progress):
         ok = np.asarray(rr.result) == 0
         modes, buckled = dominant_modes_at(kind, amp, mus, dFs, n, R, seed=5)
         modes = np.where(ok & np.asarray(buckled), np.asarray(modes), np.nan).astype(float)
-        mean, std = np.nanmean(modes, axis=1), np.nanstd(modes, axis=1)
+        mean, std = finite_mean_std(modes, ddof=0)
         res[kind] = {"n": n, "amplitude": amp, "mu": mus.tolist(), "dominant_mode_mean": mean.tolist(),
                      "dominant_mode_std": std.tolist(), "dominant_mode_min": float(np.nanmin(modes)),
-                     "dF_evaluated": np.nanmean(np.where(ok, dFs, np.nan), axis=1).tolist()}
+                     "dF_evaluated": finite_mean_std(np.where(ok, dFs, np.nan))[0].tolist()}
         axes[0].errorbar(mus, mean, yerr=std, fmt="o-", capsize=3, label=f"{kind} (field, ΔF = 1.05 ΔF*)")
         for i, m in enumerate(mus):
             rows.append(dict(perturbation=kind, mu=m, mode_mean=mean[i], mode_std=std[i]))
