@@ -152,14 +152,16 @@ def test_energy_is_conserved_without_friction_and_closes_with_it():
 
 
 def test_static_friction_holds_and_dynamic_friction_sets_the_deceleration():
-    """A free rod on the bottom pushed along its axis by a body force b: below μ_s·w it does
-    not move (to elastic micro-motion, < 1e-9 m); above, it slides with (b/w − μ_d) g."""
+    """A free rod on the bottom released from rest and pushed along its axis by a body force b,
+    with the default options (the run stops when the rod is stuck): below μ_s·w it does not
+    move (to elastic micro-motion, < 1e-9 m); above, it slides with (b/w − μ_d) g. (The stick
+    stop once declared both stuck at step 0: the contacts start at rest, under μ_s.)"""
     rod = jr.RodChannel.reference(0.5).with_friction(0.5, 0.3)
     w = float(rod.w)
     for ratio in (0.4, 0.8):
         m = Rod3D(rod, 20, ends="free", body_force=(ratio * w, 0.0, 0.0))
         s0 = m.initial_state()
-        sol = simulate_rod3d(m, s0, 0.02, 3, save_state=True)
+        sol = simulate_rod3d(m, s0, 0.02, 3, save_state=True, stop_when_stuck=True)
         dx = np.asarray(sol.q.x[-1, :, 0] - s0[0].x[:, 0])
         if ratio < 0.5:
             assert np.max(np.abs(dx)) < 1e-9

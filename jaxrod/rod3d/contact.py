@@ -13,7 +13,7 @@ from . import components as c3
 from .energy import _penetration
 from .state import held_pattern
 
-__all__ = ["node_weights", "FIELDS", "pass_dtype", "friction_table", "friction_pass"]
+__all__ = ["node_weights", "FIELDS", "pass_dtype", "friction_table", "friction_pass", "static_equilibrium"]
 
 # the friction pass's fields of each contact, rows of `friction_table`: the outward radius
 # e_r = (0, e1, e2), the tangent inverse mass W, the bounds per unit time, whether it is active,
@@ -307,3 +307,46 @@ def friction_pass(model, friction, table, Q, v, w, stuck, force, h):
     any_contact = jnp.any(node[0]["active"]) | jnp.any(node[1]["active"])
     return (v, w, merge(*stucks, n1), force.astype(state_dtype), jnp.where(any_contact, residual, 0.0).astype(state_dtype),
             jnp.asarray(sweeps, state_dtype))
+
+
+
+def static_equilibrium(model, x, Q, f, tau, N):
+    """Whether the rod at rest at (x, Q) is held there by static friction: the forces `f`
+    (n + 1, 3) [N] (everything but wall friction), material torques `tau` (n, 3) [N·m] and wall
+    forces `N` (n + 1,) [N] balance with friction forces inside the static cones.
+
+    Each node's free translation fixes its friction force: F = −(t₁·f, t₂·f) on the free
+    components (t₁ = x̂, t₂ = x̂ × e_r), and it must lie within μ_s N (a node with a free
+    translation must touch the wall, and the wall must take its radial force). The friction at
+    the contact point (arm r, `friction_at`) adds the couples c r (F₁û₁ + F₂û₂) to the node's two
+    segments, which must balance their free torque components. The radial and torque balances
+    are tested to the friction pass's own tolerance (`model.friction_tol` of the largest wall
+    force, and of the largest torque or friction couple): a rod at an equilibrium of the
+    discrete model passes, a rod whose forces ask more than μ_s N of a contact, or that the
+    friction couples would roll, does not.
+
+    **Returns:** a boolean per node (n + 1,): node i is held (free translations balanced inside
+    its cone), and `all` of it with `segments_held` (n,) is the whole test: `(nodes, segments)`."""
+    held_n, held_s = (jnp.asarray(a) for a in held_pattern(model))
+    dtype = f.dtype
+    if not model.channel:  # nothing holds a free rod in space
+        return jnp.zeros(held_n.shape[:1], bool) | jnp.all(held_n, -1), jnp.all(held_s, -1)
+    _, (_, e1, e2) = _penetration(model, c3.unpack(x))
+    ff = jnp.where(held_n, 0.0, f)  # the supports take the held components
+    F1, F2 = -ff[:, 0], -(e1 * ff[:, 2] - e2 * ff[:, 1])  # t₂ = (0, −e₂, e₁)
+    radial = e1 * ff[:, 1] + e2 * ff[:, 2]
+    tol = model.friction_tol.astype(dtype)
+    free = ~jnp.all(held_n, -1)
+    inside = safe_hypot(F1, F2) <= model.rod.mu_s * N
+    nodes = ~free | ((N > 0) & inside & (jnp.abs(radial) <= tol * jnp.max(N)))
+    # the friction couples on the segments (lab frame), each node's share c of its arm r
+    r = _arm(model, dtype)
+    cl, cr = node_weights(model)
+    couple = (F2, F1 * e2, -F1 * e1)  # F₁û₁ + F₂û₂, û₁ = (0, e₂, −e₁), û₂ = x̂
+    on_seg = tuple(r * (cr[:-1] * a[:-1] + cl[1:] * a[1:]) for a in couple)
+    Qr = c3.unpack_matrix(Q)
+    resid = jnp.stack(c3.matvec(Qr, on_seg), -1) + tau  # material frame
+    resid = jnp.where(held_s, 0.0, resid)
+    scale = jnp.maximum(jnp.max(jnp.abs(tau)), r * jnp.max(model.rod.mu_s * N))
+    segments = jnp.all(jnp.abs(resid) <= tol * scale, -1)
+    return nodes, segments

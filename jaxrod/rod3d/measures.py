@@ -7,6 +7,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from .. import theory
+from . import contact
 
 __all__ = ["amplitude", "stop_measures", "buckle_threshold", "observables"]
 
@@ -29,12 +30,19 @@ def amplitude(model, q):
     return 2.0 * jnp.arctan(jnp.max(ratio))
 
 
-def stop_measures(model, q, v):
-    """The amplitude, and whether every free node is at rest and held by static friction at the
-    last impulse (under a constant load nothing can then release it)."""
-    held, _ = model.held()
-    free = ~jnp.any(held, -1)
-    stuck = jnp.all(jnp.where(free, v.stuck, True)) & jnp.all(jnp.where(free[:, None], v.v == 0, True))
+def stop_measures(model, q, v, a):
+    """The amplitude, and whether the rod is stuck: at rest (every node and spin that may move),
+    every node with a free translation held by static friction at the last impulse, and the
+    forces `a` at `q` in static equilibrium with friction inside the static cones
+    (`jaxrod.rod3d.contact.static_equilibrium`): under a constant load nothing can then move
+    it. The equilibrium test is what a state that no friction pass has seen yet is judged by
+    (t = 0, where a contact at rest starts under the static coefficient): a rod released from
+    rest is stuck only if its forces are held."""
+    held_n, held_s = model.held()
+    at_rest = jnp.all(jnp.where(held_n, True, v.v == 0)) & jnp.all(jnp.where(held_s, True, v.w == 0))
+    nodes, segments = contact.static_equilibrium(model, q.x, q.Q, a.f, a.tau, a.N)
+    free = ~jnp.all(held_n, -1)
+    stuck = at_rest & jnp.all(nodes & (v.stuck | ~free)) & jnp.all(segments)
     return amplitude(model, q), stuck
 
 

@@ -296,7 +296,7 @@ class Rod3D(AbstractModel):
 
     def stop_measures(self, q, v: Rod3DVelocity, a, t=None):
         """The amplitude and the stick test (`jaxrod.rod3d.measures.stop_measures`)."""
-        return measures.stop_measures(self, q, v)
+        return measures.stop_measures(self, q, v, a)
 
     @property
     def autonomous(self) -> bool:

@@ -1,0 +1,66 @@
+"""A 3D rod released from rest, with the default options (the run stops when the rod is stuck).
+
+A contact at rest starts under the static coefficient, and no friction pass has yet seen the
+forces at t = 0: the stick stop must judge the forces themselves (a contact is held only while
+the force it must resist from rest is within μ_s N), or every rod released from rest is
+declared stuck at step 0. References: the same runs without the stop (which cannot freeze), and
+Coulomb's law for a free rod pushed along the channel."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import jaxrod as jr
+from jaxrod import SweepSpec, sweep
+from jaxrod.rod3d import Rod3D, step_limit
+from jaxrod.scene import Scene, make_perturbation
+
+
+def test_a_random_shape_released_from_rest_gets_the_label_of_the_run_without_the_stop():
+    """Random lateral shapes (±2 mm) released from rest at ΔF = 0 (below the frictionless load:
+    they slide back and stay) and ΔF = 40 N (outside the stable zone: they buckle), through a
+    3D sweep with the default stop: each member's label, buckling time and amplitude are those of
+    its single run without the stop (which cannot freeze a rod), to one step. Before the force
+    test every member stopped at step 0 and was reported stable."""
+    spec = SweepSpec(model="rod3d", n=12, perturbation="random-shape", amplitude=2e-3, t1=0.05)
+    res = sweep(spec, {"dF": [0.0, 40.0], "realization": [0, 1]}, seed=3, progress=False)
+    assert res.outputs["result"].tolist() == [0] * 4
+    np.testing.assert_array_equal(res.outputs["buckled"], [False, False, True, True])
+    assert np.all(res.outputs["steps"] > 0)
+    rod, dt = jr.RodChannel.reference(0.3), res.meta["dt"]
+    opts = jr.RunOptions(stop_when_stuck=False, save_state=False)
+    for i in range(len(res)):
+        pert = make_perturbation("random-shape", 2e-3, 6, jax.random.fold_in(jax.random.key(3), i))
+        scene = Scene(rod, res.inputs["dF"][i], pert, "rod3d", n=12, dt=dt)
+        sol = jr.simulate(scene.model(), scene.integrator(), *scene.initial_state(), 0.05, n_save=201,
+                          options=opts, throw=False)
+        assert bool(sol.buckled) == bool(res.outputs["buckled"][i])
+        if sol.buckled:
+            assert abs(float(sol.t_buckle) - res.outputs["t_buckle"][i]) <= 1.01 * dt
+        else:  # not stopped before t1 either: the same run to the end
+            np.testing.assert_allclose(res.outputs["max_theta"][i], float(jnp.max(sol.amplitude)), rtol=1e-4)
+
+
+def test_the_stick_test_at_rest_holds_exactly_the_forces_inside_the_static_cone():
+    """A free rod at rest on the channel bottom pushed along its axis by a body force b per
+    length: with friction at the centre line it is held while b < μ_s w (0.49 w: held; 0.51 w:
+    not), whatever the dynamic coefficient. With friction at the contact point the axial friction
+    also tilts the segments (a couple r·F that nothing balances in the straight rod): not held
+    even at 0.4 w — it must move, by an elastic micro-motion, before it can stick. The straight
+    rod under a dead load F⁰₆ + 5 N (an equilibrium) is held; a random shape at F⁰₆ + 40 N is
+    not (this was the state declared stuck at step 0)."""
+    rod = jr.RodChannel.reference(0.5).with_friction(0.5, 0.3)
+    w = float(rod.w)
+
+    def stuck_at_rest(model, state):
+        return bool(model.stop_measures(state[0], state[1], model.acceleration(state[0]))[1])
+
+    for at, ratio, held in (("axis", 0.49, True), ("axis", 0.51, False), ("surface", 0.4, False)):
+        m = Rod3D(rod, 12, ends="free", body_force=(ratio * w, 0.0, 0.0), friction_at=at)
+        assert stuck_at_rest(m, m.initial_state()) == held, (at, ratio)
+    rod = jr.RodChannel.reference(0.3)
+    F = float(jr.theory.frictionless_load(rod, 6))
+    m = Rod3D(rod, 12, control="load", end_load=F + 5.0)
+    assert stuck_at_rest(m, m.initial_state(F + 5.0))
+    scene = Scene(rod, 40.0, make_perturbation("random-shape", 2e-3, 6, jax.random.key(0)), "rod3d", n=12, dt=1e-5)
+    assert not stuck_at_rest(scene.model(), scene.initial_state())
