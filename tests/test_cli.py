@@ -1,3 +1,4 @@
+import csv
 import json
 import math
 import os
@@ -6,7 +7,9 @@ import sys
 
 import pytest
 
+import jaxrod as jr
 from jaxrod.cli import main
+from jaxrod.scene import Scene, make_perturbation
 
 EXPECTED_KEYS = {"F0cr_continuous", "omega0", "critical_mode", "F0_mode", "k", "f", "Adot_cr", "v_cr", "A_cr"}
 
@@ -157,8 +160,26 @@ def test_map_main_job(tmp_path, capsys, monkeypatch):
     v_b = fric["boundary_v0"]
     assert len(v_b) >= 3 and all(b <= a for a, b in zip(v_b, v_b[1:]))  # boundary falls with dF
     assert -1.0 < fric["exponent"] < -0.3
-    rows = (out / "map.csv").read_text().splitlines()
-    assert len(rows) == 1 + 2 * 24
+    # the boundary searched at every load (root finding on the departure, not the grid) lies
+    # inside each column's grid bracket: a boundary read one cell off falls outside it
+    dF = s["dF"]
+    for f, lo, hi in zip(fric["boundary_dF"], fric["boundary_v0_lo"], fric["boundary_v0_hi"]):
+        v = fric["curve_v0"][dF.index(f)]
+        assert v is not None and lo <= v <= hi, (f, lo, v, hi)
+    # the CSV holds every member's numbers; the members either side of a boundary, rerun as
+    # single scenes at the map's resolution, get the same labels
+    with open(out / "map.csv") as fh:
+        rows = [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
+    assert len(rows) == 2 * 24
+    mine = [r for r in rows if float(r["mu"]) == 0.3]
+    assert sum(r["buckled"] in ("1", "True") for r in mine) == fric["buckled"]
+    f, lo, hi = fric["boundary_dF"][0], fric["boundary_v0_lo"][0], fric["boundary_v0_hi"][0]
+    rod = jr.RodChannel.reference(0.3)
+    for v0, label in ((lo, False), (hi, True)):
+        row = next(r for r in mine if float(r["dF"]) == f and float(r["v0"]) == v0)
+        assert (row["buckled"] in ("1", "True")) == label
+        scene = Scene(rod, f, make_perturbation("sine", v0), "field", n=s["n"], dt=s["dt"])
+        assert bool(scene.run(t1=0.5, save_state=False).buckled) == label
 
 
 def test_map_bad_range(capsys):
