@@ -183,9 +183,11 @@ def test_map_main_job(tmp_path, capsys, monkeypatch):
 
 
 def test_map_bad_range(capsys):
-    with pytest.raises(SystemExit):
+    with pytest.raises(SystemExit) as exc:
         main(["map", "--dF", "5:1:3"])
-    assert "--dF" in capsys.readouterr().err
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "--dF" in err and "'5:1:3'" in err and "LO < HI" in err and "Traceback" not in err
 
 
 def test_version(capsys):

@@ -19,9 +19,12 @@ def test_simulate_rod3d_displacement_control_reports_the_peak_reaction(capsys):
     assert out["result"] == "successful"
 
 
-def test_simulate_rod3d_rejects_other_perturbations():
-    with pytest.raises(SystemExit):
+def test_simulate_rod3d_rejects_other_perturbations(capsys):
+    with pytest.raises(SystemExit) as exc:
         main(["simulate", "--model", "rod3d", "--perturbation", "random-velocity", "--n", "8"])
+    assert exc.value.code == 2  # argparse's usage error, not a traceback or success
+    err = capsys.readouterr().err
+    assert "--perturbation" in err and "'random-velocity'" in err and "'sine'" in err
 
 
 @pytest.mark.slow  # two 3D runs of 60 segments (about 1 min each on the 2-core CPU)

@@ -156,10 +156,25 @@ def test_ensemble_probability_with_confidence_interval():
     res = sweep(SPEC, {"dF": [2.0, 40.0], "amplitude": 0.03, "realization": np.arange(8)}, progress=False)
     prob = res.probability("realization")
     assert prob["p"].shape == (2, 1)
-    assert np.all((prob["lo"] <= prob["p"]) & (prob["p"] <= prob["hi"]))
-    assert prob["p"][1, 0] >= prob["p"][0, 0]  # more load, more buckling
-    lo, hi = jr.wilson_interval(0, 10)
-    assert lo == pytest.approx(0.0, abs=1e-12) and 0.2 < hi < 0.35
+    # the counts are the members' labels, the band is Wilson's of those counts
+    k = res.grid("buckled").sum(axis=2)
+    np.testing.assert_array_equal(prob["buckled"], k)
+    np.testing.assert_array_equal(prob["n"], [[8], [8]])
+    np.testing.assert_array_equal(prob["p"], k / 8)
+    lo, hi = jr.wilson_interval(k, 8)
+    np.testing.assert_array_equal(prob["lo"], lo)
+    np.testing.assert_array_equal(prob["hi"], hi)
+    print("buckled of 8 at dF = 2, 40 N:", k.ravel().tolist())
+    # ±30 mm/s random velocities: none buckles at 2 N, most at 40 N (measured 0 and 7 of 8)
+    assert prob["p"][0, 0] == 0.0 and prob["p"][1, 0] >= 0.75
+    # Wilson's score interval by hand (z = 1.96): 0 of 10 gives (0, z²/(n + z²)) = (0, 0.277537);
+    # 3 of 10 the textbook (0.107789, 0.603226)
+    lo, hi = jr.wilson_interval(np.array([0, 3]), np.array([10, 10]))
+    np.testing.assert_allclose(lo, [0.0, 0.1077893], atol=1e-7)
+    np.testing.assert_allclose(hi, [3.8416 / 13.8416, 0.6032268], atol=1e-7)
+    # a 90 % band (z = 1.645) is narrower: 3 of 10 gives (0.126867, 0.558322)
+    lo, hi = jr.wilson_interval(3, 10, z=1.645)
+    np.testing.assert_allclose([lo, hi], [0.126867, 0.558322], atol=1e-6)
 
 
 @pytest.mark.slow  # 35 s of compilation; the pool's member-equals-single-run check runs by default for the reduced models
