@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench bench-quick docs docs-serve clean
+.PHONY: demo test test-slow mutants bench bench-quick docs docs-serve clean
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
@@ -24,6 +24,12 @@ test: $(STAMP)
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -m slow -n $(TEST_WORKERS) --dist loadfile
+
+# Mutation testing (mutmut) of the physics and reporting modules against the default tests mapped
+# to each (tools/mutants.py): report in results/mutation/. GROUPS="theory friction" runs some.
+mutants: $(STAMP)
+	$(BIN)/pip install --quiet -e ".[mutation]"
+	$(BIN)/python tools/mutants.py $(GROUPS)
 
 # Every script under benchmarks/, the quick ones first; scripts added later run after these.
 BENCH_FIRST := field_throughput alternatives sweep_throughput boundary_cost field_convergence model_choice
@@ -50,4 +56,4 @@ docs-serve: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs serve
 
 clean:
-	rm -rf $(VENV) results/demo site
+	rm -rf $(VENV) results/demo site mutants

@@ -4,6 +4,7 @@ buckling threshold of each control, and the observables at a save. Functions of 
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from .. import theory
@@ -40,9 +41,14 @@ def stop_measures(model, q, v, a):
     rest is stuck only if its forces are held."""
     held_n, held_s = model.held()
     at_rest = jnp.all(jnp.where(held_n, True, v.v == 0)) & jnp.all(jnp.where(held_s, True, v.w == 0))
-    nodes, segments = contact.static_equilibrium(model, q.x, q.Q, a.f, a.tau, a.N)
     free = ~jnp.all(held_n, -1)
-    stuck = at_rest & jnp.all(nodes & (v.stuck | ~free)) & jnp.all(segments)
+
+    def held():
+        nodes, segments = contact.static_equilibrium(model, q.x, q.Q, a.f, a.tau, a.N)
+        return jnp.all(nodes & (v.stuck | ~free)) & jnp.all(segments)
+
+    # a moving rod (nearly every step) skips the equilibrium test (under vmap both branches run)
+    stuck = jax.lax.cond(at_rest, held, lambda: jnp.array(False))
     return amplitude(model, q), stuck
 
 

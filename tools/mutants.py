@@ -1,0 +1,163 @@
+"""Mutation testing of jaxrod's physics and reporting modules (`make mutants`).
+
+Each group mutates some modules with mutmut and runs, for every mutant, the default-suite tests
+of the group's test files that executed the mutated function (mutmut's stats run maps them).
+Every group runs in a copy of the checkout (`mutmut` keeps its state in `mutants/` there), so
+groups do not disturb each other or the working tree. The report (`report.md`, `report.json`
+under `--out`) gives per group the mutants made, killed, survived, without a test, timed out,
+and the equivalent ones (listed with their reason in `tools/mutants_equivalent.json`), the score
+killed / (made − equivalent), and the diff of every survivor.
+
+    python tools/mutants.py                  # every group
+    python tools/mutants.py theory friction  # some groups
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+# group: (modules mutated, test files whose default tests may kill them)
+GROUPS = {
+    "theory": (["jaxrod/theory.py"], ["tests/test_theory.py"]),
+    "friction": (["jaxrod/friction.py"], ["tests/test_single_mode.py", "tests/test_leapfrog.py"]),
+    "perturbations": (["jaxrod/perturbations.py"], ["tests/test_fidelity.py", "tests/test_field.py"]),
+    "models": (["jaxrod/models/*"], ["tests/test_single_mode.py", "tests/test_field.py", "tests/test_engine.py"]),
+    "rod3d": (["jaxrod/rod3d/energy.py", "jaxrod/rod3d/contact.py", "jaxrod/rod3d/model.py"],
+              ["tests/test_rod3d.py", "tests/test_rod3d_contact.py", "tests/test_rod3d_rest.py",
+               "tests/test_rod3d_loaded.py"]),
+    "boundary": (["jaxrod/boundary/*"], ["tests/test_boundary.py"]),
+    "stability_map": (["jaxrod/stability_map.py"], ["tests/test_cli.py"]),
+    "sweeps_result": (["jaxrod/sweeps/result.py"], ["tests/test_sweep.py"]),
+}
+
+STATUS = ("killed", "survived", "no tests", "timeout", "suspicious", "segfault", "skipped", "not checked")
+
+
+def _config(modules, tests) -> str:
+    return "\n".join([
+        "[tool.mutmut]",
+        'source_paths = ["jaxrod/"]',
+        'pytest_add_cli_args = ["-p", "no:xdist", "-p", "no:cacheprovider"]',
+        f"pytest_add_cli_args_test_selection = {json.dumps(tests)}",
+        f"only_mutate = {json.dumps(modules)}",
+        # a fresh interpreter per mutant: JAX's threads make forking a warmed-up process unsafe
+        'process_isolation = "forkserver"',
+        'forkserver_warmup = "none"',
+        "",
+    ])
+
+
+def run_group(name: str, jobs: int) -> dict:
+    modules, tests = GROUPS[name]
+    work = tempfile.mkdtemp(prefix=f"jaxrod-mutants-{name}-")
+    for d in ("jaxrod", "tests"):
+        shutil.copytree(os.path.join(ROOT, d), os.path.join(work, d),
+                        ignore=shutil.ignore_patterns("__pycache__", ".pytest_cache"))
+    text = open(os.path.join(ROOT, "pyproject.toml")).read()
+    text = re.sub(r"\n\[tool\.mutmut\].*?(?=\n\[|\Z)", "\n", text, flags=re.S)
+    with open(os.path.join(work, "pyproject.toml"), "w") as f:
+        f.write(text + "\n" + _config(modules, tests))
+    mutmut = os.path.join(os.path.dirname(sys.executable), "mutmut")
+    t0 = time.time()
+    print(f"== {name}: mutating {', '.join(modules)} against {', '.join(tests)}", flush=True)
+    subprocess.run([mutmut, "run", "--max-children", str(jobs)], cwd=work, check=False)
+    out = subprocess.run([mutmut, "results", "--all", "true"], cwd=work, capture_output=True, text=True).stdout
+    status = {}
+    for line in out.splitlines():
+        m = re.match(r"\s*(\S+): (.+)$", line)
+        if m:
+            status[m.group(1)] = m.group(2).strip()
+    diffs = {}
+    for key, s in status.items():
+        if s != "killed":
+            diffs[key] = subprocess.run([mutmut, "show", key], cwd=work, capture_output=True, text=True).stdout
+    shutil.rmtree(work, ignore_errors=True)
+    return {"modules": modules, "tests": tests, "seconds": round(time.time() - t0, 1), "status": status,
+            "diffs": diffs}
+
+
+def summarise(group: dict, equivalent: dict) -> dict:
+    counts = {s: 0 for s in STATUS}
+    for key, s in group["status"].items():
+        counts[s if s in counts else "suspicious"] += 1
+    made = len(group["status"])
+    eq = [k for k, s in group["status"].items() if k in equivalent and s != "killed"]
+    counts["equivalent"] = len(eq)
+    counts["made"] = made
+    counts["score"] = counts["killed"] / (made - len(eq)) if made > len(eq) else float("nan")
+    return counts
+
+
+def _commit() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True).stdout.strip()
+    except OSError:
+        return "unknown"
+
+
+def write_report(results: dict, out: str):
+    equivalent = json.load(open(os.path.join(ROOT, "tools", "mutants_equivalent.json")))
+    os.makedirs(out, exist_ok=True)
+    rows, body = [], []
+    total = {"made": 0, "killed": 0, "equivalent": 0}
+    for name, g in results.items():
+        c = summarise(g, equivalent)
+        for k in total:
+            total[k] += c[k]
+        rows.append(f"| {name} | {c['made']} | {c['killed']} | {c['survived']} | {c['no tests']} | {c['timeout']} | "
+                    f"{c['equivalent']} | {100 * c['score']:.1f} % | {g['seconds']:.0f} s |")
+        for key, diff in g["diffs"].items():
+            s = g["status"][key]
+            why = f" — equivalent: {equivalent[key]}" if key in equivalent else ""
+            body.append(f"### {key}: {s}{why}\n\n```diff\n{diff.strip()}\n```\n")
+    score = total["killed"] / max(total["made"] - total["equivalent"], 1)
+    head = [f"# Mutation testing (mutmut), commit {_commit()}, {datetime.date.today()}", "",
+            "Score = killed / (made − equivalent); a mutant without a test or that timed out counts as not killed.", "",
+            "| group | made | killed | survived | no tests | timeout | equivalent | score | time |",
+            "|---|---|---|---|---|---|---|---|---|", *rows, "",
+            f"**All groups run: {total['killed']} killed of {total['made'] - total['equivalent']} non-equivalent "
+            f"mutants, {100 * score:.1f} %.**", "", "## Mutants not killed", ""]
+    with open(os.path.join(out, "report.md"), "w") as f:
+        f.write("\n".join(head + body))
+    with open(os.path.join(out, "report.json"), "w") as f:
+        json.dump({"commit": _commit(), "date": str(datetime.date.today()),
+                   "groups": results},
+                  f, indent=1)
+    print("\n".join(head[:len(rows) + 8]))
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("groups", nargs="*", help=f"groups to run (default: all): {', '.join(GROUPS)}")
+    p.add_argument("--out", default=os.path.join(ROOT, "results", "mutation"), help="report folder")
+    p.add_argument("--jobs", type=int, default=2, help="mutants run side by side")
+    a = p.parse_args(argv)
+    bad = [g for g in a.groups if g not in GROUPS]
+    if bad:
+        p.error(f"argument groups: {bad} not among {list(GROUPS)}")
+    results = {}
+    path = os.path.join(a.out, "report.json")
+    if os.path.exists(path):  # earlier groups of the same commit stay in the report
+        old = json.load(open(path))
+        if old.get("commit") == _commit():
+            results.update(old["groups"])
+    for g in a.groups or list(GROUPS):
+        results[g] = run_group(g, a.jobs)
+        write_report(results, a.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
