@@ -111,11 +111,6 @@ def test_error_is_one_line_naming_the_option_before_any_work(argv, option, tmp_p
     assert set(compilations) <= ALLOWED, compilations
 
 
-def test_at_least_twenty_distinct_paths_with_bad_paths_among_them():
-    assert len({tuple(a) for a, _ in CASES}) == len(CASES) >= 20
-    assert sum(o in ("--out", "--export", "--plot") for _, o in CASES) >= 8
-
-
 @pytest.mark.parametrize("argv", [["simulate", "--model", "field", "--n", "8", "--dt", "1"],
                                   ["simulate", "--model", "mode", "--mode", "200"]],  # the default step
                          ids=["given", "default"])

@@ -16,6 +16,12 @@ KINDS = [("mode", None, 0.2), ("galerkin", 8, 0.2), ("field", 24, 0.2),
          pytest.param("rod3d", 10, 0.03, marks=pytest.mark.slow)]
 
 
+# the energy balance's largest drift over the largest energy, at 10× what was measured for the
+# stable and the buckled run: single mode 6.6e-6 / 4.0e-5, Galerkin 8.9e-5 / 3.9e-3, field
+# 2.0e-4 / 3.6e-3 (the 3D rod's slow case keeps 5 %)
+BALANCE = {"mode": 4e-4, "galerkin": 0.04, "field": 0.036, "rod3d": 0.05}
+
+
 @pytest.mark.parametrize("kind,n,t1", KINDS)
 def test_each_model_through_simulate_under_jit_and_vmap_equals_its_single_runs(kind, n, t1):
     dt = Scene(ROD, 5.0, kind=kind, n=n).step()
@@ -45,7 +51,7 @@ def test_each_model_through_simulate_under_jit_and_vmap_equals_its_single_runs(k
         np.testing.assert_allclose(batch.t_stop[i], one.t_stop, rtol=1e-12)
         # the energy balance closes for every model (E + dissipated − work_in constant)
         scale = max(float(jnp.max(jnp.abs(e))) for e in one.energies.values())
-        assert float(jnp.max(jnp.abs(one.energy_balance))) < 0.05 * scale
+        assert float(jnp.max(jnp.abs(one.energy_balance))) < BALANCE[kind] * scale
     assert not bool(batch.buckled[0]) and bool(batch.buckled[1])
 
 

@@ -71,14 +71,22 @@ def test_with_friction_both_schemes_converge_to_the_same_run():
 
 @pytest.mark.parametrize("scheme", ["leapfrog", "verlet"])
 def test_a_rod_held_by_static_friction_does_not_move(scheme):
-    """Under a load inside the friction cone a rod at rest stays exactly at rest with either
-    scheme (the hold condition of one pass of h is that of two of h/2)."""
-    rod = jr.RodChannel.reference(0.3)
+    """A mode-6 offset scaled so that the largest conservative acceleration it leaves is 0.95 of
+    the static bound μ_s N/(ρR) (μ_s = 0.3 above μ_d = 0.2): the rod at rest stays exactly at rest
+    with either scheme (the hold condition of one pass of h is that of two of h/2). At 1.05 of
+    the static bound it moves, and under the dynamic coefficient it slips at once."""
+    rod = jr.RodChannel.reference(0.3).with_friction(0.3, 0.2)
     scene = Scene(rod, -1.0, jr.SineVelocity(0.0, 6.0), "field", n=24)
     model = scene.model()
-    q0 = 1e-3 * jnp.sin(6 * jnp.pi * jnp.asarray(model.sample_points()) / float(rod.L))  # a mode-6 offset [rad]
+    shape = jnp.sin(6 * jnp.pi * jnp.asarray(model.sample_points()) / float(rod.L))  # a mode-6 offset [rad]
+    t = jnp.zeros(())
+    f_s, f_d = model.friction_bounds(t)
+    unit = float(jnp.max(jnp.abs(model.acceleration(shape, t)) / f_s))  # the offset's share of the bound per rad
     integ = (jr.ProjectedLeapfrog if scheme == "leapfrog" else jr.ProjectedVerlet)(scene.step())
     opts = jr.RunOptions(stop_when_stuck=False, save_state=True)
-    sol = jr.simulate(model, integ, q0, jnp.zeros_like(q0), 0.02, n_save=5, options=opts, throw=False)
-    assert float(jnp.max(jnp.abs(sol.q - q0[None]))) == 0.0
-    assert bool(sol.stuck[-1])
+    for share, held in ((0.95, True), (1.05, False)):
+        q0 = share / unit * shape
+        sol = jr.simulate(model, integ, q0, jnp.zeros_like(q0), 0.02, n_save=5, options=opts, throw=False)
+        moved = float(jnp.max(jnp.abs(sol.q - q0[None])))
+        assert (moved == 0.0) == held, (share, moved)
+        assert bool(sol.stuck[0]) == held

@@ -10,7 +10,8 @@ from jaxrod.model_choice import choose_model
 TABLE = os.path.join(os.path.dirname(__file__), "..", "benchmarks", "results", "model_choice.csv")
 
 # Every scene of benchmarks/model_choice.py: (scene name in its CSV, perturbation, the largest load
-# the computation meets [N], mu) and the rule's answer for it.
+# the computation meets [N], mu) and the rule's answer for it (checked against the measured table
+# below, not restated).
 SCENES = [
     ("sine mode 6, dF = 1 N, mu = 0.3", "sine", 1.0, 0.3, ("mode", None)),
     ("sine mode 6, dF = 5 N, mu = 0.3", "sine", 5.0, 0.3, ("field", 128)),
@@ -21,11 +22,6 @@ SCENES = [
     ("random position ±2 N/m, mu = 0.05", "random-position", 200.0, 0.05, ("field", 384)),
     ("random position ±2 N/m, mu = 1", "random-position", 200.0, 1.0, ("field", 384)),
 ]
-
-
-@pytest.mark.parametrize("name, perturbation, dF, mu, expected", SCENES)
-def test_rule_for_each_measured_scene(name, perturbation, dF, mu, expected):
-    assert choose_model(perturbation, dF, mu) == expected
 
 
 def test_rule_picks_only_models_measured_within_two_percent():

@@ -11,10 +11,6 @@ nbclient = pytest.importorskip("nbclient")
 NOTEBOOKS = sorted(pathlib.Path(__file__).parent.parent.joinpath("notebooks").glob("0*.ipynb"))
 
 
-def test_all_six_notebooks_are_there():
-    assert [p.stem[:2] for p in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06"]
-
-
 @pytest.mark.parametrize("path", [p if p.stem.startswith("01") else pytest.param(p, marks=pytest.mark.slow)
                                   for p in NOTEBOOKS], ids=lambda p: p.stem)
 def test_notebook_runs(path, tmp_path, monkeypatch):

@@ -1,3 +1,4 @@
+import csv
 import json
 import logging
 import os
@@ -80,6 +81,9 @@ sweep(SPEC, INPUTS, seed=3, chunk_size=4, path="{path}", progress=False, on_chun
     assert res.returncode == 3, res.stderr[-3000:]
     assert sorted(os.listdir(path)) == ["chunk_00000.npz", "sweep.json"]
     mtime = os.path.getmtime(path / "chunk_00000.npz")
+    # a chunk half written when the process died: the temporary file it was written to (the
+    # chunk's name appears only once it is complete) — ignored on resume
+    (path / ".tmp_half.npz").write_bytes(b"PK\x03\x04 half a chunk")
     computed = []
     resumed = sweep(SPEC, INPUTS, seed=3, chunk_size=4, path=str(path), progress=False,
                     on_chunk=computed.append)
@@ -91,6 +95,32 @@ sweep(SPEC, INPUTS, seed=3, chunk_size=4, path="{path}", progress=False, on_chun
     same(full, loaded)
     assert loaded.shape == (2, 2, 3) and loaded.names == ("dF", "amplitude", "realization")
     np.testing.assert_array_equal(loaded.inputs["dF"], full.inputs["dF"])
+    assert sorted(p for p in os.listdir(path) if p.startswith("chunk_")) == [f"chunk_0000{c}.npz" for c in range(3)]
+
+
+def test_member_ranges_concatenate_to_the_whole_sweep_and_the_csv_holds_its_numbers(tmp_path):
+    """`sweep(members=…)` runs a sub-range of the global members (what a host of a distributed
+    run does); `SweepResult.concatenate` of disjoint ranges, in any order, is the whole sweep;
+    `to_csv` writes every member's inputs and outputs as numbers that read back equal."""
+    full = sweep(SPEC, INPUTS, seed=3, chunk_size=4, progress=False)
+    parts = [sweep(SPEC, INPUTS, seed=3, chunk_size=4, members=r, progress=False)
+             for r in (range(8, 12), range(0, 5), range(5, 8))]
+    assert [len(p) for p in parts] == [4, 5, 3]
+    np.testing.assert_array_equal(parts[0].inputs["index"], [8, 9, 10, 11])
+    same(full, SweepResult.concatenate(parts))
+    full.to_csv(str(tmp_path / "s.csv"))
+    with open(tmp_path / "s.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == len(full)
+    for i, row in enumerate(rows):
+        for k, v in {**full.inputs, **full.outputs}.items():
+            want = v[i]
+            got = row[k]
+            if isinstance(want, (bool, np.bool_)):
+                assert got in (str(bool(want)), str(int(want))), (k, got, want)
+            else:
+                assert float(got) == pytest.approx(float(want), rel=1e-12, abs=0.0) or (
+                    np.isinf(float(want)) and float(got) == float(want)), (k, got, want)
 
 
 def test_mismatched_resume_is_refused_and_metadata_round_trips(tmp_path):

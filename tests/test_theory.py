@@ -191,3 +191,22 @@ def test_held_end_amplitude_takes_up_the_load_excess():
         shortening = np.trapezoid(0.5 * slope**2, s)
         assert float(rod.EA) * shortening / float(rod.L) == pytest.approx(dF, rel=1e-6)
     assert float(jr.theory.held_end_amplitude(rod, 5.0)) == pytest.approx(0.376, abs=0.002)
+
+
+@pytest.mark.parametrize("F", [0.5, 3.0, 20.0, 200.0])
+def test_max_growth_rate_is_the_fastest_wave_on_a_fine_grid(F):
+    """λ_max(F) against a brute-force maximum of √(−k(κ)) over 200 001 wavenumbers, with
+    −k(κ) = κ²(F − EIκ²)/ρ − w/(ρR) written out by hand (PHYSICS.md P3 for a continuous κ); 0
+    where no wave grows (F² < 4EIw/R: 0.5 N for the reference rod)."""
+    rod = jr.RodChannel.reference()
+    EI, rho, R = float(rod.EI), float(rod.rho), float(rod.R)
+    w = rho * float(rod.g)
+    kappa = np.linspace(0.0, 4 * math.sqrt(F / (2 * EI)), 200_001)
+    minus_k = kappa**2 * (F - EI * kappa**2) / rho - w / (rho * R)
+    brute = math.sqrt(max(minus_k.max(), 0.0))
+    got = float(th.max_growth_rate(rod, F))
+    if brute == 0.0:
+        assert got == 0.0
+    else:
+        assert got == pytest.approx(brute, rel=1e-8)
+    assert (F**2 > 4 * EI * w / R) == (got > 0)
