@@ -102,6 +102,11 @@ def test_quick_reproduction_of_e2_and_e3(tmp_path):
         assert (tmp_path / f).stat().st_size > 0, f
     assert math.isfinite(res["e3"]["boundary_exponent"]) and res["e3"]["boundary_exponent"] < 0
     assert res["e3"]["frictionless_buckles_for_every_dF_gt_0"] is True
+    # E2's number: the phase portraits' grid of initial states, each classified by a simulation
+    # and by the theory's stable zone (P5), agree on at least 95 % of the points of every panel
+    agreement = res["e2"]["grid_agreement_simulated_vs_analytic"]
+    print("E2 agreement per panel:", agreement)
+    assert len(agreement) == 6 and min(agreement.values()) >= 0.95, agreement
 
 
 def test_statistics_over_realizations_skip_failed_ones_without_warnings():
