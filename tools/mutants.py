@@ -29,7 +29,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # group: (modules mutated, test files whose default tests may kill them)
 GROUPS = {
-    "theory": (["jaxrod/theory.py"], ["tests/test_theory.py"]),
+    "theory": (["jaxrod/theory.py"], ["tests/test_theory.py", "tests/test_theory_hand.py"]),
     "friction": (["jaxrod/friction.py"], ["tests/test_single_mode.py", "tests/test_leapfrog.py"]),
     "perturbations": (["jaxrod/perturbations.py"], ["tests/test_fidelity.py", "tests/test_field.py"]),
     "models": (["jaxrod/models/*"], ["tests/test_single_mode.py", "tests/test_field.py", "tests/test_engine.py"]),
