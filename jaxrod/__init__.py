@@ -12,6 +12,10 @@ from . import _xla
 
 _xla.configure()  # before JAX starts its CPU backend: see jaxrod/_xla.py
 
+from . import _cache
+
+_cache.configure()  # the persistent compilation cache: see jaxrod/_cache.py
+
 from . import boundary as boundary
 from . import distributed as distributed
 from . import modal as modal

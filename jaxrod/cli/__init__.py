@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from ._checks import check_args, check_figure_path
@@ -23,6 +24,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = _Parser(prog="jaxrod", description="Dynamics and stability of a rod in a channel with dry friction.")
     p.add_argument("--version", action="version", version=f"jaxrod {__version__}")
+    cache = p.add_mutually_exclusive_group()
+    cache.add_argument("--cache-dir", metavar="DIR", default=None,
+                       help="folder of the persistent compilation cache (default: the user's cache folder, "
+                            "or $JAXROD_CACHE_DIR; jaxrod/_cache.py)")
+    cache.add_argument("--no-cache", action="store_true",
+                       help="compile everything anew, reading and writing no compilation cache")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     t = sub.add_parser("theory", help="analytic loads and stable-zone intercepts (docs/physics.md P3-P7)")
@@ -148,11 +155,23 @@ def _resolve_auto_model(args) -> None:
                      + (f" with n = {args.n}" if args.n is not None else "") + "\n")
 
 
+def _set_cache(args) -> None:
+    """`--no-cache` and `--cache-dir` (jaxrod/_cache.py)."""
+    from .. import _cache
+
+    if args.no_cache:
+        _cache.use(None)
+    elif args.cache_dir is not None:
+        _check_writable("--cache-dir", args.cache_dir)
+        _cache.use(os.path.abspath(os.path.expanduser(args.cache_dir)))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one command. Every error a user can cause ends in one line on stderr naming the
     option and exit code 2; values that need no computation are checked before any work."""
     args = build_parser().parse_args(argv)
     check_args(args)
+    _set_cache(args)
     if hasattr(args, "distributed"):  # first: jax.distributed starts before any JAX computation
         _start_distributed(args)
     if getattr(args, "model", None) == "auto":

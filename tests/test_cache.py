@@ -1,0 +1,52 @@
+"""The persistent compilation cache that jaxrod switches on (jaxrod/_cache.py): where it lives,
+how it is switched off or moved, and that a second process compiles nothing of jaxrod's (JAX's
+own cache-miss log, in fresh processes)."""
+
+import os
+import subprocess
+import sys
+
+import jax
+import jaxlib
+
+from jaxrod import _cache
+
+PROGRAM = "jaxrod simulate --model field --n 8 --t1 0.01 --json"
+
+
+def test_cache_folder_follows_the_platform_and_the_environment(tmp_path):
+    versions = f"jax-{jax.__version__}-jaxlib-{jaxlib.__version__}"
+    if sys.platform.startswith("linux"):
+        env = {"XDG_CACHE_HOME": str(tmp_path)}
+        assert _cache.cache_dir(env) == os.path.join(str(tmp_path), "jaxrod", versions)
+    assert _cache.cache_dir({_cache.ENV: str(tmp_path / "c")}) == str(tmp_path / "c")
+    for off in ("off", "0", "", "None", "false"):
+        assert _cache.cache_dir({_cache.ENV: off}) is None
+
+
+def _run(args, env_extra, cwd):
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("JAX_", "JAXROD_"))}
+    env.update({"JAX_EXPLAIN_CACHE_MISSES": "1", "JAX_LOG_COMPILES": "1", **env_extra})
+    exe = os.path.join(os.path.dirname(sys.executable), "jaxrod")
+    res = subprocess.run([exe, *args], env=env, cwd=cwd, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    return res.stderr
+
+
+def test_a_second_process_compiles_nothing_and_off_means_off(tmp_path):
+    folder = tmp_path / "cache"
+    args = PROGRAM.split()[1:]
+    first = _run(args, {_cache.ENV: str(folder)}, tmp_path)
+    assert "PERSISTENT COMPILATION CACHE MISS" in first and len(os.listdir(folder)) > 10
+    second = _run(args, {_cache.ENV: str(folder)}, tmp_path)
+    assert "Persistent compilation cache hit" in second
+    assert "PERSISTENT COMPILATION CACHE MISS" not in second, [
+        line for line in second.splitlines() if "MISS" in line][:5]
+    # switched off by the command line's --no-cache ($JAXROD_CACHE_DIR=off: cache_dir() is None,
+    # above); moved by --cache-dir
+    off = _run(["--no-cache", *args], {_cache.ENV: str(folder)}, tmp_path)
+    assert "cache hit" not in off
+    # (what importing jaxrod compiled before the options were read came from $JAXROD_CACHE_DIR)
+    moved = _run(["--cache-dir", str(tmp_path / "moved"), *args], {_cache.ENV: str(folder)}, tmp_path)
+    assert "PERSISTENT COMPILATION CACHE MISS for 'jit__simulate'" in moved
+    assert len(os.listdir(tmp_path / "moved")) > 10
