@@ -8,6 +8,8 @@ integrators and `simulate`, perturbations, `Scene`, `sweep`, and the boundary se
 `reproduce`).
 """
 
+from typing import TYPE_CHECKING
+
 from . import _xla
 
 _xla.configure()  # before JAX starts its CPU backend: see jaxrod/_xla.py
@@ -36,7 +38,6 @@ from .friction import Tanh as Tanh
 from .friction import coulomb_prox as coulomb_prox
 from .integrators import AbstractFixedStep as AbstractFixedStep
 from .integrators import AbstractIntegrator as AbstractIntegrator
-from .integrators import DiffraxSmooth as DiffraxSmooth
 from .integrators import Exact as Exact
 from .integrators import ProjectedLeapfrog as ProjectedLeapfrog
 from .integrators import ProjectedVerlet as ProjectedVerlet
@@ -76,3 +77,15 @@ __all__ = [
     "distributed", "exact_solution", "modal", "perturbations", "rod3d", "scene", "search", "simulate",
     "stability_map", "sweep", "theory", "wilson_interval", "worst_case",
 ]
+
+
+if TYPE_CHECKING:  # imported on first use (diffrax: 0.7 s), see `__getattr__`
+    from .integrators.smooth import DiffraxSmooth as DiffraxSmooth
+
+
+def __getattr__(name):
+    if name == "DiffraxSmooth":
+        from .integrators.smooth import DiffraxSmooth
+
+        return DiffraxSmooth
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,7 +15,6 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
 
 from . import theory
 from .boundary import rod_indicator, safeguarded_newton
@@ -92,6 +91,8 @@ def worst_case_velocity(
     cands = jnp.concatenate([sine[None], rand])
     norms = jnp.concatenate([norm_sine[None], jnp.where(rand_res == 0, rand_norms, jnp.inf)])
     xi = cands[int(jnp.argmin(norms))]
+    import optax  # here: 0.2 s to import, which `import jaxrod` need not pay
+
     opt = optax.adam(learning_rate)
     with jax.numpy_dtype_promotion("standard"):
         state = opt.init(xi)

@@ -1,12 +1,24 @@
+from typing import TYPE_CHECKING
+
 from .base import AbstractFixedStep as AbstractFixedStep
 from .base import AbstractIntegrator as AbstractIntegrator
 from .base import RunOptions as RunOptions
 from .exact import Exact as Exact
 from .explicit import SplitLinearFriction as SplitLinearFriction
 from .explicit import SymplecticEuler as SymplecticEuler
-from .smooth import DiffraxSmooth as DiffraxSmooth
 from .verlet import ProjectedVerlet as ProjectedVerlet
 from .leapfrog import ProjectedLeapfrog as ProjectedLeapfrog
+
+if TYPE_CHECKING:  # imported on first use: diffrax takes 0.7 s to import (`__getattr__`)
+    from .smooth import DiffraxSmooth as DiffraxSmooth
+
+
+def __getattr__(name):
+    if name == "DiffraxSmooth":
+        from .smooth import DiffraxSmooth
+
+        return DiffraxSmooth
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 SCHEMES = {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet}
