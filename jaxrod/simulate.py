@@ -61,9 +61,15 @@ def simulate(
     checked = (isinstance(integrator, AbstractFixedStep) and _is_concrete(model)
                and _is_concrete(dataclasses.replace(integrator, dt=1.0)))
     if checked:
-        with jax.ensure_compile_time_eval():  # concrete even inside a caller's jit
-            # the limit does not depend on dt: one compilation for every dt of a scheme
-            limit = np.asarray(_step_limit(dataclasses.replace(integrator, dt=1.0), model))
+        # eagerly: the limit is 2/ω_max of the model (closed form for the reduced models; for the
+        # 3D rod its one compiled power iteration, shared with `Scene.step` and the sweeps). Inside
+        # a caller's jit it is staged: then computed at trace time (a context in which JAX
+        # compiles a jitted function anew, so only there)
+        try:
+            limit = np.asarray(integrator.step_limit(model))
+        except (jax.errors.TracerArrayConversionError, jax.errors.ConcretizationTypeError):
+            with jax.ensure_compile_time_eval():
+                limit = np.asarray(integrator.step_limit(model))
         if np.any(integrator.dt >= limit):
             raise ValueError(
                 f"{type(integrator).__name__}.dt = {integrator.dt!r} s is above the stability "
@@ -72,12 +78,18 @@ def simulate(
     # Initial values become arrays so that new values never trigger a recompilation.
     q0, v0 = as_state(q0), as_state(v0)
     options = RunOptions() if options is None else options
+    if options.progress and isinstance(integrator, AbstractFixedStep) and _is_concrete((model, integrator, q0, v0)):
+        return _simulate_in_blocks(model, integrator, q0, v0, float(t1), n_save, options, throw, checked)
     return _simulate(model, integrator, q0, v0, float(t1), n_save, options, throw, checked)
 
 
-@eqx.filter_jit
-def _step_limit(integrator, model):
-    return integrator.step_limit(model)
+def _finalize(model, sol: Solution, throw: bool) -> Solution:
+    result = jnp.where(model.check(), sol.result, RESULTS.invalid_input).astype(jnp.int32)
+    sol = eqx.tree_at(lambda s: s.result, sol, result)
+    if throw:
+        msgs = [RESULTS.messages[i] for i in range(len(RESULTS.messages))]
+        sol = eqx.branched_error_if(sol, result != RESULTS.successful, result, msgs)
+    return sol
 
 
 @eqx.filter_jit
@@ -86,9 +98,65 @@ def _simulate(model, integrator, q0, v0, t1, n_save, options, throw, checked):
         sol = integrator.integrate(model, q0, v0, t1, n_save, options, check_step_limit=False)
     else:
         sol = integrator.integrate(model, q0, v0, t1, n_save, options)
-    result = jnp.where(model.check(), sol.result, RESULTS.invalid_input).astype(jnp.int32)
-    sol = eqx.tree_at(lambda s: s.result, sol, result)
-    if throw:
-        msgs = [RESULTS.messages[i] for i in range(len(RESULTS.messages))]
-        sol = eqx.branched_error_if(sol, result != RESULTS.successful, result, msgs)
-    return sol
+    return _finalize(model, sol, throw)
+
+
+BLOCKS = 20
+"""A run with a progress bar reports after each of about this many blocks of save intervals."""
+
+
+def _block_size(intervals: int) -> int:
+    """Save intervals per block: a divisor of `intervals` near intervals/`BLOCKS` (the smallest
+    divisor at least that, unless it is more than 4× that: then the largest divisor below)."""
+    target = max(1, -(-intervals // BLOCKS))
+    up = next(b for b in range(target, intervals + 1) if intervals % b == 0)
+    if up <= 4 * target:
+        return up
+    return next(b for b in range(target, 0, -1) if intervals % b == 0)
+
+
+@eqx.filter_jit
+def _start(model, integrator, q0, v0, t1, n_save, options):
+    s0 = integrator.start(model, q0, v0, options)
+    return s0, integrator.record(model, s0, integrator.save_step(t1, n_save), options)
+
+
+@eqx.filter_jit
+def _saves(model, integrator, s, first, count, t1, n_save, options, checked):
+    """A block of save intervals, and what the solution needs of the state after it (the
+    velocity at the positions and the result code: the last block's are the run's)."""
+    s, recs = integrator.run_saves(model, s, first, count, t1, n_save, options)
+    h = integrator.save_step(t1, n_save)
+    v_final = integrator.velocity_at(model, s.q, s.v, s.a, s.t, h)
+    code = integrator.result(model, s, h, check_step_limit=not checked)
+    code = jnp.where(model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
+    return s, recs, v_final, code
+
+
+def _simulate_in_blocks(model, integrator, q0, v0, t1, n_save, options, throw, checked):
+    """`_simulate` with a progress bar: the save intervals run in blocks of one compiled program
+    (`AbstractFixedStep.run_saves`), the bar advancing on the host between blocks, and the
+    solution is put together on the host. The run is the same, step for step; no compiled
+    program calls back to Python, so every one is written to the persistent compilation cache
+    (jaxrod/_cache.py)."""
+    from .integrators import progress
+
+    quiet = dataclasses.replace(options, progress=False)
+    s0, rec0 = _start(model, integrator, q0, v0, t1, n_save, quiet)
+    total = n_save - 1
+    size = _block_size(total)
+    s, blocks = s0, [jax.tree_util.tree_map(lambda x: x[None], rec0)]
+    for first in range(0, total, size):
+        s, recs, v_final, code = _saves(model, integrator, s, jnp.asarray(first, jnp.int32), size, t1, n_save,
+                                        quiet, checked)
+        blocks.append(recs)
+        progress.tick(first + size, total, bool(s.stopped))
+    recs = jax.tree_util.tree_map(lambda *xs: np.concatenate([np.asarray(x) for x in xs]), *blocks)
+    if throw and int(code) != RESULTS.successful:
+        raise eqx.EquinoxRuntimeError(RESULTS.messages[int(code)])
+    return Solution(
+        ts=np.linspace(0.0, t1, n_save), q=recs.get("q"), v=recs.get("v"), stuck=recs["stuck"],
+        amplitude=recs["amplitude"], energies=recs["energies"], dissipated=recs["dissipated"],
+        work_in=recs["work_in"], observables=recs["observables"], buckled=s.buckled, t_buckle=s.t_buckle,
+        t_stop=s.stop_time(t1, n_save), q_final=s.q, v_final=v_final, result=code, n_steps=s.steps,
+    )

@@ -232,24 +232,39 @@ class AbstractFixedStep(AbstractIntegrator):
         )
 
     def integrate(self, model, q0, v0, t1, n_save, options=RunOptions(), check_step_limit=True):
-        m, h = save_grid(t1, n_save, self.dt)
-        dtype = jnp.result_type(float)
-        h = jnp.asarray(h, dtype)
+        h = self.save_step(t1, n_save)
         s0 = self.start(model, q0, v0, options)
+        s, recs = self.run_saves(model, s0, 0, n_save - 1, t1, n_save, options)
+        return self.solution(model, s0, s, recs, t1, n_save, options, check_step_limit)
 
-        def record(s):
-            s = eqx.tree_at(lambda r: r.v, s, self.velocity_at(model, s.q, s.v, s.a, s.t, h))
-            rec = {
-                "stuck": s.stuck,
-                "dissipated": sum(jnp.sum(x) for x in jax.tree_util.tree_leaves(s.dissipated)),
-                "work_in": s.work_in,
-                "amplitude": model.amplitude(s.q),
-                "energies": model.energy_terms(s.q, s.v, s.t),
-                "observables": model.observables(s.q, s.v, s.a, s.t),
-            }
-            if options.save_state:
-                rec["q"], rec["v"] = s.q, s.v
-            return rec
+    def save_step(self, t1, n_save):
+        """The step a run to `t1` with `n_save` saves takes [s] (`save_grid`), as an array."""
+        return jnp.asarray(save_grid(t1, n_save, self.dt)[1], jnp.result_type(float))
+
+    def record(self, model, s: RunState, h, options: RunOptions) -> dict:
+        """What a save records of the run state `s` (the step `h` gives the velocity at the
+        positions for a scheme that carries the half step's)."""
+        s = eqx.tree_at(lambda r: r.v, s, self.velocity_at(model, s.q, s.v, s.a, s.t, h))
+        rec = {
+            "stuck": s.stuck,
+            "dissipated": sum(jnp.sum(x) for x in jax.tree_util.tree_leaves(s.dissipated)),
+            "work_in": s.work_in,
+            "amplitude": model.amplitude(s.q),
+            "energies": model.energy_terms(s.q, s.v, s.t),
+            "observables": model.observables(s.q, s.v, s.a, s.t),
+        }
+        if options.save_state:
+            rec["q"], rec["v"] = s.q, s.v
+        return rec
+
+    def run_saves(self, model, s: RunState, first, count: int, t1, n_save: int, options: RunOptions):
+        """`count` save intervals (static) of a run to `t1` with `n_save` saves, from the state
+        `s` after save interval `first` (an index, may be traced): the state after them and their
+        records, stacked. `integrate` runs all n_save − 1 at once; [`jaxrod.simulate`][] with a
+        progress bar runs them in blocks, reporting between blocks from the host (a compiled
+        program that calls back to Python is never written to the compilation cache)."""
+        m, _ = save_grid(t1, n_save, self.dt)
+        h = self.save_step(t1, n_save)
 
         def interval(s):
             step = lambda s: self.advance(model, s, h, m, n_save, options)
@@ -259,7 +274,7 @@ class AbstractFixedStep(AbstractIntegrator):
                 )
             else:
                 s = jax.lax.fori_loop(0, m, lambda _, s: step(s), s)
-            return s, record(s)
+            return s, self.record(model, s, h, options)
 
         # the saves in a loop of known length: XLA compiles a loop over an unknown count (a
         # `while` that ends when the run stops) into a slower step (3D rod, 500 segments: 173–176
@@ -271,9 +286,17 @@ class AbstractFixedStep(AbstractIntegrator):
                 jax.debug.callback(progress.tick, i + 1, n_save - 1, s.stopped)
             return s, rec
 
-        s, recs = jax.lax.scan(scan_body, s0, jnp.arange(n_save - 1))
-        recs = jax.tree_util.tree_map(lambda x0, xs: jnp.concatenate([x0[None], xs]), record(s0), recs)
+        first = jnp.asarray(first)
+        return jax.lax.scan(scan_body, s, first + jnp.arange(count, dtype=first.dtype))
 
+    def solution(self, model, s0: RunState, s: RunState, recs: dict, t1, n_save: int, options: RunOptions,
+                 check_step_limit: bool = True) -> Solution:
+        """The [`jaxrod.Solution`][] of a run from `s0` that ended at `s` with the records `recs`
+        of its n_save − 1 save intervals."""
+        h = self.save_step(t1, n_save)
+        dtype = jnp.result_type(float)
+        recs = jax.tree_util.tree_map(lambda x0, xs: jnp.concatenate([x0[None], xs]),
+                                      self.record(model, s0, h, options), recs)
         ts = jnp.linspace(0.0, t1, n_save, dtype=dtype)
         return Solution(
             ts=ts,

@@ -26,7 +26,7 @@ from .._numerics import computed_once, float_leaf
 from . import components as c3, energy, measures
 from .contact import friction_pass, friction_table
 from .state import held_pattern, Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
-from .stiffness import max_frequency
+from .stiffness import max_frequency_jit
 
 __all__ = ["Rod3D"]
 
@@ -346,8 +346,9 @@ class Rod3D(AbstractModel):
     def max_frequency(self, q: Rod3DPosition | None = None, iters: int = 80) -> Float[Array, ""]:
         """ω_max [rad/s] of the linearised conservative dynamics at `q` (default: the straight
         rod under its end load), by power iteration (`jaxrod.rod3d.stiffness.max_frequency`).
-        The explicit step limit is 2/ω_max."""
-        return max_frequency(self, self.initial_state()[0] if q is None else q, iters)
+        The explicit step limit is 2/ω_max. One compiled function for every caller and state of
+        the same shape (`jaxrod.rod3d.stiffness.max_frequency_jit`)."""
+        return max_frequency_jit(self, self.initial_state()[0] if q is None else q, iters)
 
     # -- states ------------------------------------------------------------------------------
     def static_sag(self):

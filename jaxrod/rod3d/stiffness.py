@@ -52,12 +52,13 @@ def max_frequency(model, q, iters: int = 80) -> Float[Array, ""]:
     return jnp.sqrt(jnp.abs(lam))
 
 
-@eqx.filter_jit
-def _limit(model, q):
-    return 2.0 / model.max_frequency(q)
+# one compiled power iteration per model shape, for every caller: the step limit of a scene or a
+# sweep, the check of `jaxrod.simulate`, `Rod3D.max_frequency` (written to the persistent
+# compilation cache like every program: a later process only traces it)
+max_frequency_jit = eqx.filter_jit(max_frequency)
 
 
 def step_limit(model, q=None) -> float:
     """The explicit step limit 2/ω_max [s] of the rod `model` at `q` (default: straight, under its
     end load): the stiffest of the axial, shear, bending, twist and contact vibrations."""
-    return float(_limit(model, q))
+    return float(2.0 / model.max_frequency(q))
