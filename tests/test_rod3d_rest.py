@@ -12,7 +12,7 @@ import numpy as np
 
 import jaxrod as jr
 from jaxrod import SweepSpec, sweep
-from jaxrod.rod3d import Rod3D, step_limit
+from jaxrod.rod3d import Rod3D
 from jaxrod.scene import Scene, make_perturbation
 
 
