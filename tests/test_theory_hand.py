@@ -6,6 +6,8 @@ surviving in theory.py (results/mutation/report.md)."""
 
 import math
 
+import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -134,3 +136,57 @@ def test_stable_zone_polygon_spans_its_extent_and_is_symmetric():
     assert steps[-1] == pytest.approx(11 * a * (2 * n - 3) / (n - 1) ** 2, rel=1e-9)
     steps = np.abs(np.diff(A[n:2 * n]))
     assert steps[-1] == pytest.approx(9 * a / (n - 1) ** 2, rel=1e-9)
+
+
+def test_reference_load_is_mode_6_by_hand_and_short_rods_take_mode_1():
+    om2 = (6 * math.pi / L) ** 2
+    assert float(th.reference_load(ROD)) == pytest.approx(EI * om2 + W / (R * om2), rel=1e-12)
+    # a rod so short that its continuous critical wavenumber lies below the first mode
+    # (ω₀L/π = 0.46): the mode with the lowest load, by brute force over m = 1..10
+    short = eqx.tree_at(lambda r: r.L, ROD, jnp.asarray(0.25))
+    loads = [float(th.frictionless_load(short, m)) for m in range(1, 11)]
+    assert int(th.critical_mode(short)) == 1 + int(np.argmin(loads)) == 1
+    # batched rods: one mode per rod, also in the planar limit
+    two = eqx.tree_at(lambda r: r.L, ROD, jnp.asarray([3.0, 0.25]))
+    assert th.critical_mode(two).tolist() == [6, 1] and th.critical_mode(two, planar=True).tolist() == [1, 1]
+
+
+def test_planar_stiffness_and_default_is_not_planar():
+    om2 = (6 * math.pi / L) ** 2
+    F = 2.0
+    assert float(th.stiffness(ROD, 6, F, planar=True)) == pytest.approx(om2 / RHO * (EI * om2 - F), rel=1e-12)
+    np.testing.assert_array_equal(th.critical_loads(ROD, 4, 2.0), th.critical_loads(ROD, 4, 2.0, planar=False))
+
+
+def test_dtypes_and_broadcasting_of_the_stable_zone():
+    """float32 inputs stay float32 (a user's single-precision batch), ints become floats; the
+    zone broadcasts over every argument (k, f, f_s as arrays of loads or coefficients)."""
+    out = th.velocity_intercept(jnp.float32(-4.0), jnp.float32(2.0))
+    assert out.dtype == jnp.float32 and float(out) == 1.0
+    assert th.velocity_intercept(-4, 2).dtype == jnp.float64
+    ks = jnp.asarray([-4.0, 0.0, 4.0])
+    assert th.in_stable_zone(0.1, 0.0, ks, 2.0).shape == (3,)
+    assert th.in_stable_zone(0.1, 0.0, -4.0, jnp.asarray([0.1, 2.0])).tolist() == [False, True]
+    assert th.in_stable_zone(0.45, 0.0, -4.0, 1.6, f_static=jnp.asarray([1.6, 2.0])).tolist() == [False, True]
+    # the gradient of the velocity intercept where nothing grows (k > 0) is 0, not NaN
+    assert float(jax.grad(th.velocity_intercept, argnums=1)(1.0, 0.7)) == 0.0
+
+
+def test_stick_line_with_static_above_dynamic_friction():
+    """k = −4, f = 2, f_s = 2.4 (λ = 2, a = 0.5, a_s = 0.6): a slip from A < −a ends stuck iff
+    A_stop = a − √((a − A)² − (Ȧ/λ)²) ≥ −a_s, i.e. Ȧ² ≥ λ²((a − A)² − (a + a_s)²)."""
+    k, f, fs = -4.0, 2.0, 2.4
+    A = -1.2
+    edge = 2 * math.sqrt((0.5 - A) ** 2 - 1.1**2)
+    zone = lambda Ad: bool(th.in_stable_zone(A, Ad, k, f, f_static=fs))
+    assert zone(1.001 * edge) and not zone(0.999 * edge)
+
+
+def test_stable_zone_polygon_defaults():
+    k, f = -4.0, 2.0
+    A, Ad = th.stable_zone_boundary(k, f)
+    assert A.shape == (800,) and float(jnp.min(A)) == pytest.approx(-50 * 0.5)
+    A40, _ = th.stable_zone_boundary(k, f, n=40)
+    assert A40.shape == (160,)
+    steps = np.abs(np.diff(np.asarray(A40)[:40]))
+    assert steps[0] == pytest.approx(51 * 0.5 / 39**2, rel=1e-9)

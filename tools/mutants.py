@@ -58,7 +58,9 @@ def _config(modules, tests) -> str:
     ])
 
 
-def run_group(name: str, jobs: int) -> dict:
+def run_group(name: str, jobs: int, only: list[str] | None = None, earlier: dict | None = None) -> dict:
+    """Run a group's mutants (or only the mutants `only`, keeping the `earlier` result's status
+    of the others: `--survivors` after new tests)."""
     modules, tests = GROUPS[name]
     work = tempfile.mkdtemp(prefix=f"jaxrod-mutants-{name}-")
     for d in ("jaxrod", "tests"):
@@ -71,20 +73,23 @@ def run_group(name: str, jobs: int) -> dict:
     mutmut = os.path.join(os.path.dirname(sys.executable), "mutmut")
     t0 = time.time()
     print(f"== {name}: mutating {', '.join(modules)} against {', '.join(tests)}", flush=True)
-    subprocess.run([mutmut, "run", "--max-children", str(jobs)], cwd=work, check=False)
+    subprocess.run([mutmut, "run", "--max-children", str(jobs), *(only or [])], cwd=work, check=False)
     out = subprocess.run([mutmut, "results", "--all", "true"], cwd=work, capture_output=True, text=True).stdout
     status = {}
     for line in out.splitlines():
         m = re.match(r"\s*(\S+): (.+)$", line)
         if m:
             status[m.group(1)] = m.group(2).strip()
+    if only is not None and earlier is not None:
+        status = {**earlier["status"], **{k: status.get(k, "not checked") for k in only}}
     diffs = {}
     for key, s in status.items():
         if s != "killed":
             diffs[key] = subprocess.run([mutmut, "show", key], cwd=work, capture_output=True, text=True).stdout
     shutil.rmtree(work, ignore_errors=True)
-    return {"modules": modules, "tests": tests, "seconds": round(time.time() - t0, 1), "status": status,
-            "diffs": diffs}
+    seconds = round(time.time() - t0, 1) + (earlier["seconds"] if only is not None and earlier else 0.0)
+    return {"modules": modules, "tests": tests, "seconds": seconds, "status": status, "diffs": diffs,
+            "commit": _commit(), "date": str(datetime.date.today())}
 
 
 def summarise(group: dict, equivalent: dict) -> dict:
@@ -116,7 +121,7 @@ def write_report(results: dict, out: str):
         c = summarise(g, equivalent)
         for k in total:
             total[k] += c[k]
-        rows.append(f"| {name} | {c['made']} | {c['killed']} | {c['survived']} | {c['no tests']} | {c['timeout']} | "
+        rows.append(f"| {name} ({g.get('commit', '?')}, {g.get('date', '?')}) | {c['made']} | {c['killed']} | {c['survived']} | {c['no tests']} | {c['timeout']} | "
                     f"{c['equivalent']} | {100 * c['score']:.1f} % | {g['seconds']:.0f} s |")
         for key, diff in g["diffs"].items():
             s = g["status"][key]
@@ -143,6 +148,8 @@ def main(argv=None) -> int:
     p.add_argument("groups", nargs="*", help=f"groups to run (default: all): {', '.join(GROUPS)}")
     p.add_argument("--out", default=os.path.join(ROOT, "results", "mutation"), help="report folder")
     p.add_argument("--jobs", type=int, default=2, help="mutants run side by side")
+    p.add_argument("--survivors", action="store_true",
+                   help="rerun only the mutants the report lists as not killed (after new tests)")
     a = p.parse_args(argv)
     bad = [g for g in a.groups if g not in GROUPS]
     if bad:
@@ -151,10 +158,11 @@ def main(argv=None) -> int:
     path = os.path.join(a.out, "report.json")
     if os.path.exists(path):  # earlier groups of the same commit stay in the report
         old = json.load(open(path))
-        if old.get("commit") == _commit():
-            results.update(old["groups"])
+        results.update(old["groups"])  # each group's own commit is in the report
     for g in a.groups or list(GROUPS):
-        results[g] = run_group(g, a.jobs)
+        earlier = results.get(g) if a.survivors else None
+        only = [k for k, v in earlier["status"].items() if v != "killed"] if earlier else None
+        results[g] = run_group(g, a.jobs, only, earlier)
         write_report(results, a.out)
     return 0
 
