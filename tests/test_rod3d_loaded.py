@@ -1,63 +1,84 @@
-"""The 3D rod loaded past the frictionless buckling load F⁰₆, in the default suite: its growth
-rate against the single-mode theory (an independent reference: P3 of docs/physics.md, which
-nothing in the 3D rod uses)."""
+"""The 3D rod loaded past the frictionless buckling load F⁰₆, in the default suite, against
+references that nothing in the 3D rod uses: its growth rate against the single-mode theory (P3
+of docs/physics.md), and its critical velocity against the field model's. Both run through one
+compiled batch of two 60-segment rods (the friction coefficient, the load and the initial
+state are array leaves), so the module pays one 3D compilation."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from scipy.optimize import brentq
 
 import jaxrod as jr
 from jaxrod.rod3d import Rod3D
 
+N = 60
+T1, N_SAVE = 0.4, 81
+ROD = jr.RodChannel.reference(0.3)
+# the axial wave sets the step limit (within 30 % of l/c: tests/test_rod3d.py)
+DT = float(0.4 * float(ROD.L) / N / np.sqrt(float(ROD.E) / float(ROD.rho_v)))
+SHAPE = jnp.sin(6 * jnp.pi * jnp.linspace(0.0, 1.0, N + 1))
+
+
+def _two_rods(mu, dF, v0):
+    """(See `_run`.) The arguments as float arrays of shape (2,), so that every call finds the
+    one compiled program."""
+    return _run(*(jnp.broadcast_to(jnp.asarray(x, jnp.float64), (2,)) for x in (mu, dF, v0)))
+
+
+@jax.jit
+def _run(mu, dF, v0):
+    """Two rods of 60 segments under the dead load F⁰₆ + `dF` [N] with friction `mu`, released
+    straight with the mode-6 lateral velocities `v0` [m/s] (each of shape (2,)), to 0.4 s."""
+    def one(mu, dF, v0):
+        rod = ROD.with_friction(mu, mu)
+        F = jr.theory.reference_load(rod) + dF
+        m = Rod3D(rod, N, control="load", end_load=F)
+        q, v = m.initial_state(F, lateral_velocity=v0 * SHAPE)
+        # the engine's loop itself: `simulate` under this jit would add the step-limit check
+        # (a power iteration) to the compiled program, doubling its compilation; DT is 0.4 of
+        # l/c, and the limit is within 30 % of l/c (tests/test_rod3d.py, slow)
+        integ = jr.integrators.default_for(m, DT)
+        return integ.integrate(m, q, v, T1, N_SAVE, jr.RunOptions(save_state=False), check_step_limit=False)
+
+    return jax.vmap(one)(mu, dF, v0)
+
 
 def test_frictionless_growth_rate_of_mode_6_is_the_theorys():
     """Without friction, a small mode-6 lateral velocity v₀ sin(6πs/L) on the 3D rod under the
     dead load F⁰₆ + 1 N grows as A(t) = v₀/(Rλ) sinh(λt), λ = √(−k₆) (k₆ of the theory: EI,
-    the load and the wall's w/R). λ fitted from the amplitudes at t₁/2 and t₁ (t₁ = 4/λ) is within
-    5 % of the theory's: measured −4.4 % and −2.0 % with 24 and 36 segments (−4.8, −2.2, −0.8 %
-    with 24, 36, 60 at F⁰₆ + 20 N: second order in 1/n), so 36 segments here; the prefactor
-    within 15 % (measured −8 %). The load is only 1 N past F⁰₆ (1.31 N, of which EI(6π/L)² is
+    the load and the wall's w/R). λ fitted from two saves while A < 0.01 rad (linear) is within
+    5 % of the theory's (measured −4.4 % and −2.0 % with 24 and 36 segments, −4.8, −2.2, −0.8 %
+    with 24, 36, 60 at F⁰₆ + 20 N: second order in 1/n); the prefactor within 15 %; twice the
+    velocity, twice the amplitude. The load is only 1 N past F⁰₆ (1.31 N, of which EI(6π/L)² is
     0.76 N), so that λ depends on the bending stiffness: at F⁰₆ + 20 N a doubled EI moved λ by
-    2 % only and passed."""
-    rod = jr.RodChannel.reference(0.3).with_friction(0.0, 0.0)
-    F = float(jr.theory.frictionless_load(rod, 6)) + 1.0
-    lam = float(jnp.sqrt(-jr.theory.stiffness(rod, 6, F)))
-    n, v0 = 36, 1e-4
-    m = Rod3D(rod, n, control="load", end_load=F)
-    q0, w0 = m.initial_state(F, lateral_velocity=v0 * jnp.sin(6 * jnp.pi * jnp.linspace(0.0, 1.0, n + 1)))
-    c = np.sqrt(float(rod.E) / float(rod.rho_v))  # the axial wave sets the step limit
-    dt = float(0.4 * float(rod.L) / n / c)
-    sol = jr.simulate(m, jr.integrators.default_for(m, dt), q0, w0, 4.0 / lam, n_save=41,
-                      options=jr.RunOptions(save_state=False))
-    A, ts = np.asarray(sol.amplitude), np.asarray(sol.ts)
-    assert A[-1] < 0.01  # still linear
-    fit = brentq(lambda x: np.sinh(x * ts[40]) / np.sinh(x * ts[20]) - A[40] / A[20], 0.1 * lam, 10 * lam)
+    2 % only and passed; here it gives −50 %."""
+    F = float(jr.theory.reference_load(ROD)) + 1.0
+    lam = float(jnp.sqrt(-jr.theory.stiffness(ROD, 6, F)))
+    v0 = 1e-4
+    sol = _two_rods(0.0, 1.0, [v0, 2 * v0])
+    assert np.asarray(sol.result).tolist() == [0, 0]
+    A, ts = np.asarray(sol.amplitude), np.asarray(sol.ts)[0]
+    linear = np.flatnonzero((A[1] < 0.01) & (ts > 0))  # the doubled run leaves it first
+    i, j = linear[len(linear) // 2], linear[-1]
+    assert ts[j] > 2.0 / lam  # a growth by e² at least
+    fit = brentq(lambda x: np.sinh(x * ts[j]) / np.sinh(x * ts[i]) - A[0, j] / A[0, i], 0.1 * lam, 10 * lam)
+    print(f"λ fitted {fit:.3f} 1/s, theory {lam:.3f} 1/s ({fit / lam - 1:+.2%})")
     assert abs(fit / lam - 1) < 0.05, (fit, lam)
-    # and the amplitude itself: the theory's prefactor v₀/(Rλ) to the same accuracy
-    np.testing.assert_allclose(A[-1], v0 / (float(rod.R) * lam) * np.sinh(lam * ts[-1]), rtol=0.15)
+    np.testing.assert_allclose(A[0, j], v0 / (float(ROD.R) * lam) * np.sinh(lam * ts[j]), rtol=0.15)
+    np.testing.assert_allclose(A[1, j], 2 * A[0, j], rtol=0.02)
 
 
 def test_critical_velocity_within_3_percent_of_the_field_models():
     """The 3D rod's v₀* at ΔF = 5 N (60 segments, friction at the contact point, pinned ends)
     lies within 3 % of the field model's (boundary search, default resolution): a mode-6 sine
-    velocity 3 % below the field model's v₀* leaves the 3D rod straight within 0.4 s, 3 % above it
+    velocity 3 % below the field model's v₀* leaves the 3D rod straight within 0.4 s, 3 % above
     buckles it (θ > 0.5 rad). Measured by bisection to 1 %: 26.19 mm/s against the field model's
-    26.81 (−2.3 %; 120 segments: +0.7 %, README "Field model against the 3D rod")."""
-    from jaxrod import boundary as bd
-    from jaxrod.rod3d import step_limit
-
-    rod = jr.RodChannel.reference(0.3)
-    dF, n = 5.0, 60
-    res, _ = bd.critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
+    26.81 (−2.3 %; 120 segments: +0.7 %; README "Field model against the 3D rod")."""
+    res, _ = jr.boundary.critical_velocity(ROD, 5.0, model="field", rtol=1e-4, sensitivities=())
     v_field = float(res.root)
-    F = float(jr.theory.reference_load(rod)) + dF
-    m = Rod3D(rod, n, control="load", end_load=F)
-    shape = jnp.sin(6 * jnp.pi * jnp.linspace(0.0, 1.0, n + 1))
-    states = jax.vmap(lambda v: m.initial_state(F, lateral_velocity=v * shape))(jnp.array([0.97, 1.03]) * v_field)
-    dt = float(0.5 * step_limit(m))
-    run = lambda q, v: jr.simulate(m, jr.integrators.default_for(m, dt), q, v, 0.4, n_save=11,
-                                   options=jr.RunOptions(save_state=False), throw=False)
-    sol = jax.jit(jax.vmap(run))(*states)
+    assert v_field == pytest.approx(26.81e-3, rel=0.01)
+    sol = _two_rods(0.3, 5.0, [0.97 * v_field, 1.03 * v_field])
     assert np.asarray(sol.result).tolist() == [0, 0]
     assert np.asarray(sol.buckled).tolist() == [False, True], np.asarray(sol.amplitude).max(1)
