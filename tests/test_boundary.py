@@ -72,8 +72,9 @@ def test_invalid_bracket_is_reported():
     assert int(r.result) == bd.ROOT_RESULTS.invalid_bracket
 
 
+# the Galerkin case (9 s) is slow: the field case checks the same search by default
 @pytest.mark.parametrize("model,dF", [("field", 2.0), pytest.param("field", 12.0, marks=pytest.mark.slow),
-                                      ("galerkin", 5.0)])
+                                      pytest.param("galerkin", 5.0, marks=pytest.mark.slow)])
 def test_departure_root_is_the_label_boundary_in_few_runs(model, dF):
     """The departure search against label bisection of the same runs (an independent use of the
     label only), and its IFT sensitivity against a finite difference of two root solves."""
