@@ -53,7 +53,7 @@ def test_the_stick_test_at_rest_holds_exactly_the_forces_inside_the_static_cone(
     w = float(rod.w)
 
     def stuck_at_rest(model, state):
-        return bool(model.stop_measures(state[0], state[1], model.acceleration(state[0]))[1])
+        return bool(model.is_stuck(state[0], state[1], model.acceleration(state[0])))
 
     for at, ratio, held in (("axis", 0.49, True), ("axis", 0.51, False), ("surface", 0.4, False)):
         m = Rod3D(rod, 12, ends="free", body_force=(ratio * w, 0.0, 0.0), friction_at=at)

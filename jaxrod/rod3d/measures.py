@@ -4,13 +4,12 @@ buckling threshold of each control, and the observables at a save. Functions of 
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
 from .. import theory
 from . import contact
 
-__all__ = ["amplitude", "stop_measures", "buckle_threshold", "observables"]
+__all__ = ["amplitude", "stop_measures", "is_stuck", "buckle_threshold", "observables"]
 
 
 def amplitude(model, q):
@@ -32,24 +31,29 @@ def amplitude(model, q):
 
 
 def stop_measures(model, q, v, a):
-    """The amplitude, and whether the rod is stuck: at rest (every node and spin that may move),
-    every node with a free translation held by static friction at the last impulse, and the
-    forces `a` at `q` in static equilibrium with friction inside the static cones
-    (`jaxrod.rod3d.contact.static_equilibrium`): under a constant load nothing can then move
-    it. The equilibrium test is what a state that no friction pass has seen yet is judged by
-    (t = 0, where a contact at rest starts under the static coefficient): a rod released from
-    rest is stuck only if its forces are held."""
+    """The amplitude, and whether the rod is stuck after a step: every node and spin that may
+    move at rest, and every node with a free translation held by static friction in the step's
+    friction pass. That pass saw the forces: it cancelled the step's trial velocity with
+    impulses inside the static cones (the coupled solve, friction couples included), and the
+    velocity left is exactly zero only if the radial forces and the torques balance too — a
+    static equilibrium, which under a constant load nothing can release. (A state no pass has
+    seen is judged by `is_stuck`.) Cheap: it runs after every step."""
     held_n, held_s = model.held()
     at_rest = jnp.all(jnp.where(held_n, True, v.v == 0)) & jnp.all(jnp.where(held_s, True, v.w == 0))
     free = ~jnp.all(held_n, -1)
+    return amplitude(model, q), at_rest & jnp.all(v.stuck | ~free)
 
-    def held():
-        nodes, segments = contact.static_equilibrium(model, q.x, q.Q, a.f, a.tau, a.N)
-        return jnp.all(nodes & (v.stuck | ~free)) & jnp.all(segments)
 
-    # a moving rod (nearly every step) skips the equilibrium test (under vmap both branches run)
-    stuck = jax.lax.cond(at_rest, held, lambda: jnp.array(False))
-    return amplitude(model, q), stuck
+def is_stuck(model, q, v, a):
+    """Whether the rod at (q, v) is stuck before any friction pass has seen it (the start of a
+    run: the stick flags of a contact at rest only say that it starts under the static
+    coefficient): `stop_measures`'s test, and the forces `a` at `q` in static equilibrium with
+    friction inside the static cones (`jaxrod.rod3d.contact.static_equilibrium`). A rod released
+    from rest is stuck only if its forces are held; before this test every one was declared stuck
+    at step 0."""
+    _, stuck = stop_measures(model, q, v, a)
+    nodes, segments = contact.static_equilibrium(model, q.x, q.Q, a.f, a.tau, a.N)
+    return stuck & jnp.all(nodes) & jnp.all(segments)
 
 
 def buckle_threshold(model):

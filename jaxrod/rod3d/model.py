@@ -295,8 +295,13 @@ class Rod3D(AbstractModel):
         return measures.amplitude(self, q)
 
     def stop_measures(self, q, v: Rod3DVelocity, a, t=None):
-        """The amplitude and the stick test (`jaxrod.rod3d.measures.stop_measures`)."""
+        """The amplitude and the stick test after a step (`jaxrod.rod3d.measures.stop_measures`)."""
         return measures.stop_measures(self, q, v, a)
+
+    def is_stuck(self, q, v: Rod3DVelocity, a, t=None):
+        """The stick test of a state no friction pass has seen, the start of a run: static
+        equilibrium inside the friction cones (`jaxrod.rod3d.measures.is_stuck`)."""
+        return measures.is_stuck(self, q, v, a)
 
     @property
     def autonomous(self) -> bool:
