@@ -65,11 +65,11 @@ def simulate(
         # 3D rod its one compiled power iteration, shared with `Scene.step` and the sweeps). Inside
         # a caller's jit it is staged: then computed at trace time (a context in which JAX
         # compiles a jitted function anew, so only there)
-        try:
-            limit = np.asarray(integrator.step_limit(model))
-        except (jax.errors.TracerArrayConversionError, jax.errors.ConcretizationTypeError):
+        if isinstance(jnp.zeros(()) + 0.0, jax.core.Tracer):  # staged: inside a caller's jit
             with jax.ensure_compile_time_eval():
                 limit = np.asarray(integrator.step_limit(model))
+        else:
+            limit = np.asarray(integrator.step_limit(model))
         if np.any(integrator.dt >= limit):
             raise ValueError(
                 f"{type(integrator).__name__}.dt = {integrator.dt!r} s is above the stability "
