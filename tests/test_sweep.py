@@ -271,10 +271,10 @@ def test_pool_member_equals_its_single_run():
         assert o["dominant_mode"] == int(jr.modal.dominant_mode(sol.q_final))
 
 
-# the Galerkin case (15 s) is slow: the field and single-mode cases check the same property of
-# the one pool by default
+# the Galerkin and single-mode cases (15 s and 12 s) are slow: the field case checks the same
+# property of the one pool by default
 @pytest.mark.parametrize("model,n", [("field", 16), pytest.param("galerkin", 8, marks=pytest.mark.slow),
-                                     ("mode", None)])
+                                     pytest.param("mode", None, marks=pytest.mark.slow)])
 def test_pool_does_not_depend_on_lanes_refills_or_scheduling(model, n):
     spec = SweepSpec(model=model, n=n, perturbation="random-velocity", t1=0.3)
     inputs = {"dF": [1.0, 20.0, 40.0], "amplitude": [0.002, 0.05], "realization": [0, 1]}
