@@ -9,7 +9,7 @@ step limit through `jaxrod.simulate` (`experiments.rod3d.run`), min over repeats
 compilation:
 
 - single rod, the default converged friction pass (`friction_tol` 1e-4) and one sweep
-  (`friction_sweeps=1`), each tree with its default scheme (since the eleventh session the 3D
+  (`friction_sweeps=1`), each tree with its default scheme (since an earlier revision the 3D
   rod's is projected leapfrog, one friction pass per step; earlier trees run projected Verlet,
   two);
 - a `jax.vmap` batch of 64 rods (amplitudes 5–40 mm/s; a quarter of the steps), per rod;
@@ -128,7 +128,7 @@ def sweep_use(model, F, amplitudes, dt, steps):
     from jaxrod.integrators import ProjectedVerlet
     from jaxrod.rod3d import sine_velocity
 
-    try:  # each tree's default scheme (projected leapfrog for the 3D rod since the eleventh session)
+    try:  # each tree's default scheme (projected leapfrog for the 3D rod since an earlier revision)
         from jaxrod.integrators import default_for
 
         integ = default_for(model, float(dt))

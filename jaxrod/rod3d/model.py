@@ -298,9 +298,7 @@ class Rod3D(AbstractModel):
         """The amplitude and the stick test after a step (`jaxrod.rod3d.measures.stop_measures`)."""
         return measures.stop_measures(self, q, v, a)
 
-    def is_stuck(self, q, v: Rod3DVelocity, a, t=None):
-        """The stick test of a state no friction pass has seen, the start of a run: static
-        equilibrium inside the friction cones (`jaxrod.rod3d.measures.is_stuck`)."""
+    def is_stuck(self, q, v: Rod3DVelocity, a, t=None):  # at the start of a run: `measures.is_stuck`
         return measures.is_stuck(self, q, v, a)
 
     @property
@@ -336,9 +334,7 @@ class Rod3D(AbstractModel):
         return energy.forces(self, x, Q, v)
 
     def friction_step(self, friction, table, Q, v, w, stuck, force, h):
-        """The friction impulses of a (half) step `h` [s] under `friction` with the contacts' fields
-        `table` at directors `Q`: the new (v, w, stuck, force, residual, sweeps)
-        (`contact.friction_pass`)."""
+        """The friction impulses of a (half) step `h` [s]: `contact.friction_pass`."""
         return friction_pass(self, friction, table, Q, v, w, stuck, force, h)
 
     # -- constraints and the step limit -------------------------------------------------------
@@ -349,10 +345,8 @@ class Rod3D(AbstractModel):
         return v, w
 
     def max_frequency(self, q: Rod3DPosition | None = None, iters: int = 80) -> Float[Array, ""]:
-        """ω_max [rad/s] of the linearised conservative dynamics at `q` (default: the straight
-        rod under its end load), by power iteration (`jaxrod.rod3d.stiffness.max_frequency`).
-        The explicit step limit is 2/ω_max. One compiled function for every caller and state of
-        the same shape (`jaxrod.rod3d.stiffness.max_frequency_jit`)."""
+        """ω_max [rad/s] at `q` (default: straight, under its end load): the step limit is 2/ω_max
+        (power iteration, one compiled function: `jaxrod.rod3d.stiffness.max_frequency_jit`)."""
         return max_frequency_jit(self, self.initial_state()[0] if q is None else q, iters)
 
     # -- states ------------------------------------------------------------------------------

@@ -11,7 +11,7 @@ last call with every load writes the summary from the recorded runs without runn
 
 Writes `rod3d_boundary_n{n}.json` (`_axis` added with `--friction-at axis`, `_leapfrog` with the
 default `--scheme leapfrog`: the files without it hold the runs of projected Verlet, the 3D rod's
-scheme until the eleventh session) (points, both exponents, settings), `.csv` (one row per load,
+scheme until an earlier revision) (points, both exponents, settings), `.csv` (one row per load,
 plain numbers) and `.png`.
 """
 
