@@ -154,9 +154,4 @@ def _simulate_in_blocks(model, integrator, q0, v0, t1, n_save, options, throw, c
     recs = jax.tree_util.tree_map(lambda *xs: np.concatenate([np.asarray(x) for x in xs]), *blocks)
     if throw and int(code) != RESULTS.successful:
         raise eqx.EquinoxRuntimeError(RESULTS.messages[int(code)])
-    return Solution(
-        ts=np.linspace(0.0, t1, n_save), q=recs.get("q"), v=recs.get("v"), stuck=recs["stuck"],
-        amplitude=recs["amplitude"], energies=recs["energies"], dissipated=recs["dissipated"],
-        work_in=recs["work_in"], observables=recs["observables"], buckled=s.buckled, t_buckle=s.t_buckle,
-        t_stop=s.stop_time(t1, n_save), q_final=s.q, v_final=v_final, result=code, n_steps=s.steps,
-    )
+    return s.solution(recs, t1, n_save, v_final, code)

@@ -141,6 +141,17 @@ class RunState(eqx.Module):
         """Whether the run is over: stopped, or all `n_save − 1` save intervals done."""
         return self.stopped | (self.saves >= n_save - 1)
 
+    def solution(self, recs: dict, t1: float, n_save: int, v_final, result) -> Solution:
+        """The [`jaxrod.Solution`][] of the run that ended in this state, from the records of
+        its `n_save` saves (stacked), its velocity at the positions and its result code."""
+        return Solution(
+            ts=jnp.linspace(0.0, t1, n_save, dtype=self.t.dtype), q=recs.get("q"), v=recs.get("v"),
+            stuck=recs["stuck"], amplitude=recs["amplitude"], energies=recs["energies"],
+            dissipated=recs["dissipated"], work_in=recs["work_in"], observables=recs["observables"],
+            buckled=self.buckled, t_buckle=self.t_buckle, t_stop=self.stop_time(t1, n_save), q_final=self.q,
+            v_final=v_final, result=result, n_steps=self.steps,
+        )
+
     def stop_time(self, t1: float, n_save: int):
         """When the run stopped [s]: `t` if it stopped early, else the horizon `t1`."""
         return jnp.where(self.stopped, self.t, jnp.linspace(0.0, t1, n_save, dtype=self.t.dtype)[-1])
@@ -232,7 +243,6 @@ class AbstractFixedStep(AbstractIntegrator):
         )
 
     def integrate(self, model, q0, v0, t1, n_save, options=RunOptions(), check_step_limit=True):
-        h = self.save_step(t1, n_save)
         s0 = self.start(model, q0, v0, options)
         s, recs = self.run_saves(model, s0, 0, n_save - 1, t1, n_save, options)
         return self.solution(model, s0, s, recs, t1, n_save, options, check_step_limit)
@@ -294,28 +304,10 @@ class AbstractFixedStep(AbstractIntegrator):
         """The [`jaxrod.Solution`][] of a run from `s0` that ended at `s` with the records `recs`
         of its n_save − 1 save intervals."""
         h = self.save_step(t1, n_save)
-        dtype = jnp.result_type(float)
         recs = jax.tree_util.tree_map(lambda x0, xs: jnp.concatenate([x0[None], xs]),
                                       self.record(model, s0, h, options), recs)
-        ts = jnp.linspace(0.0, t1, n_save, dtype=dtype)
-        return Solution(
-            ts=ts,
-            q=recs.get("q"),
-            v=recs.get("v"),
-            stuck=recs["stuck"],
-            amplitude=recs["amplitude"],
-            energies=recs["energies"],
-            dissipated=recs["dissipated"],
-            work_in=recs["work_in"],
-            observables=recs["observables"],
-            buckled=s.buckled,
-            t_buckle=s.t_buckle,
-            t_stop=s.stop_time(t1, n_save),
-            q_final=s.q,
-            v_final=self.velocity_at(model, s.q, s.v, s.a, s.t, h),
-            result=self.result(model, s, h, check_step_limit),
-            n_steps=s.steps,
-        )
+        return s.solution(recs, t1, n_save, self.velocity_at(model, s.q, s.v, s.a, s.t, h),
+                          self.result(model, s, h, check_step_limit))
 
     def result(self, model, s: RunState, h, check_step_limit: bool = True) -> Array:
         """The [`jaxrod.RESULTS`][] code of a finished run (`check_step_limit=False` when the
