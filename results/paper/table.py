@@ -1,4 +1,8 @@
-"""Print the README's results table from results.json (python results/paper/table.py).
+"""Print the results table from results.json (python results/paper/table.py [--compact]).
+
+The full table is the documentation site's (docs/paper.md, written at build time by docs/hooks.py);
+`--compact` prints the README's: the headline rows, without the model and command columns
+(tests/test_readme.py checks that the README's copy equals it).
 
 Every number comes from `jaxrod reproduce all --out results/paper`; the only arithmetic here is
 a second power-law fit (least squares in log-log) over the low-μ points only — for the sine
@@ -14,6 +18,7 @@ agrees and, where not, which of the reasons below applies.
 import json
 import math
 import os
+import sys
 
 import numpy as np
 
@@ -259,8 +264,23 @@ def paper(label):
     return "—", "—"
 
 
-print("| experiment | theory | paper | jaxrod (measured) | vs paper | model | command |")
-print("|---|---|---|---|---|---|---|")
-for label, theory, measured, model, command in rows:
-    says, verdict = paper(label)
-    print("| " + " | ".join((label, theory, says, measured, verdict, model, command)) + " |")
+# the README's rows (--compact): prefixes of the row labels above
+COMPACT = (
+    "E3 map:", "E3 boundary of the 3D rod: exponent", "E4 δF ∝ μ^p, sine 15", "E4 δF ∝ μ^p, random",
+    "E4 δF*, random velocity", "E5 dominant mode", "E1 critical force (peak reaction)", "E6 full model: twist",
+    "E6 full model: largest lift-off", "E6 sine mode 6", "E6 random position",
+)
+
+if "--compact" in sys.argv[1:]:
+    print("| experiment | theory | paper | jaxrod (measured) | vs paper |")
+    print("|---|---|---|---|---|")
+    for label, theory, measured, model, command in rows:
+        if label.startswith(COMPACT):
+            says, verdict = paper(label)
+            print("| " + " | ".join((label, theory, says, measured, verdict)) + " |")
+else:
+    print("| experiment | theory | paper | jaxrod (measured) | vs paper | model | command |")
+    print("|---|---|---|---|---|---|---|")
+    for label, theory, measured, model, command in rows:
+        says, verdict = paper(label)
+        print("| " + " | ".join((label, theory, says, measured, verdict, model, command)) + " |")
