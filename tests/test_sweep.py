@@ -1,6 +1,7 @@
 import csv
 import json
 import logging
+import math
 import os
 import subprocess
 import sys
@@ -13,6 +14,7 @@ import pytest
 
 import jaxrod as jr
 from jaxrod.sweeps import SweepResult, SweepSpec, sweep
+from jaxrod.sweeps import result as result_module
 
 SPEC = SweepSpec(model="field", n=16, perturbation="random-velocity", t1=0.3)
 INPUTS = {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05], "realization": [0, 1, 2]}
@@ -325,3 +327,197 @@ def test_to_xarray_labels_the_grid():
     assert bool(ds["buckled"].sel(dF=20.0, amplitude=0.05, realization=1)) == bool(res.outputs["buckled"][i])
     z = sweep(SPEC, {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05]}, combine="zip", seed=3, progress=False).to_xarray()
     assert tuple(z.sizes) == ("member",) and z.sizes["member"] == 2
+
+
+# ---- SweepResult's numbers on results built by hand (no sweep run: every expected value is
+# ---- written out below or follows from the members' own labels)
+
+Z95, Z90 = 1.96, 1.645
+
+
+def _wilson_by_hand(k, n, z):
+    """Wilson's score interval as the two roots of (n + z²) p² − (2k + z²) p + k²/n = 0 (the
+    score test |k/n − p| = z √(p(1 − p)/n), squared): another derivation than the code's."""
+    a, b, c = n + z * z, 2 * k + z * z, k * k / n
+    d = math.sqrt(b * b - 4 * a * c)
+    return (b - d) / (2 * a), (b + d) / (2 * a)
+
+
+def _hand_grid():
+    """A 2 × 2 × 3 grid (dF, amplitude, realization), members in C order. Per (dF, amplitude)
+    cell, results / buckled labels:
+      (2, 0.005):  ok ok ok     / - - -  → 0 of 3 buckled
+      (2, 0.05):   ok ok ok     / B - B  → 2 of 3
+      (20, 0.005): nan inv ok   / B - B  → 1 of 1 (the failed members left out, one labelled B)
+      (20, 0.05):  nan nan inv  / B B -  → none counted."""
+    dF = np.repeat([2.0, 20.0], 6)
+    amp = np.tile(np.repeat([0.005, 0.05], 3), 2)
+    real = np.tile([0, 1, 2], 4)
+    result = np.array([0, 0, 0, 0, 0, 0, 1, 4, 0, 1, 1, 4])
+    buckled = np.array([0, 0, 0, 1, 0, 1, 1, 0, 1, 1, 1, 0], bool)
+    outputs = {k: np.arange(12, dtype=float) / 10 for k in ("t_buckle", "max_theta", "final_theta", "t_stop")}
+    outputs.update(buckled=buckled, result=result, dominant_mode=np.arange(12) % 4 + 1,
+                   stuck=~buckled, steps=np.arange(12) * 100)
+    meta = {"spec": {"model": "field", "n": 16}, "names": ["dF", "amplitude", "realization"],
+            "shape": [2, 2, 3], "full_shape": [2, 2, 3], "seed": 3, "dt": 1e-5, "combine": "grid",
+            "devices": ["cpu:0"], "_inputs": {"dF": dF.tolist()}}
+    return SweepResult({"dF": dF, "amplitude": amp, "realization": real, "index": np.arange(12)},
+                       outputs, (2, 2, 3), ("dF", "amplitude", "realization"), meta)
+
+
+def test_summary_counts_labels_and_failures_by_hand():
+    res = _hand_grid()
+    # 7 successful members, 3 of them buckled; failures: 3 non-finite, 2 invalid inputs (the
+    # buckled labels of three of them are not counted)
+    assert res.summary() == (
+        "12 members: 3 buckled, 4 stable; 7 successful, 3 the state became non-finite (NaN or inf), "
+        "2 an input value is outside its valid range")
+
+
+def test_probability_against_hand_counts_and_hand_wilson_bands():
+    res = _hand_grid()
+    prob = res.probability()  # over "realization" by default
+    assert set(prob) == {"dF", "amplitude", "p", "lo", "hi", "n", "buckled"}
+    np.testing.assert_array_equal(prob["dF"], [[2.0, 2.0], [20.0, 20.0]])
+    np.testing.assert_array_equal(prob["amplitude"], [[0.005, 0.05], [0.005, 0.05]])
+    np.testing.assert_array_equal(prob["n"], [[3, 3], [1, 0]])
+    np.testing.assert_array_equal(prob["buckled"], [[0, 2], [1, 0]])
+    assert prob["p"].dtype == float
+    np.testing.assert_array_equal(prob["p"], [[0.0, 2 / 3], [1.0, np.nan]])
+    for z, kw in ((Z95, {}), (Z90, {"z": Z90})):
+        prob = res.probability("realization", **kw)
+        for (i, j), k, n in (((0, 0), 0, 3), ((0, 1), 2, 3), ((1, 0), 1, 1)):
+            np.testing.assert_allclose([prob["lo"][i, j], prob["hi"][i, j]], _wilson_by_hand(k, n, z),
+                                       rtol=1e-12, atol=1e-15, err_msg=f"z = {z}, {k} of {n}")
+        assert np.isnan(prob["lo"][1, 1]) and np.isnan(prob["hi"][1, 1])  # nothing counted
+    # over another axis: the amplitudes of each (dF, realization)
+    prob = res.probability("amplitude")
+    np.testing.assert_array_equal(prob["realization"], [[0, 1, 2], [0, 1, 2]])
+    np.testing.assert_array_equal(prob["n"], [[2, 2, 2], [0, 0, 1]])
+    np.testing.assert_array_equal(prob["buckled"], [[1, 0, 1], [0, 0, 1]])
+
+
+def test_probability_of_a_one_member_ensemble_and_axes_that_are_not_one():
+    # a single realization per cell (an ensemble of one): p is that member's label
+    sub = _hand_grid()
+    keep = sub.inputs["realization"] == 2
+    one = SweepResult({k: v[keep] for k, v in sub.inputs.items()}, {k: v[keep] for k, v in sub.outputs.items()},
+                      (2, 2, 1), sub.names, sub.meta)
+    prob = one.probability("realization")
+    np.testing.assert_array_equal(prob["dF"], [[2.0, 2.0], [20.0, 20.0]])
+    np.testing.assert_array_equal(prob["amplitude"], [[0.005, 0.05], [0.005, 0.05]])
+    np.testing.assert_array_equal(prob["p"], [[0.0, 1.0], [1.0, np.nan]])
+    np.testing.assert_allclose(prob["hi"][0, 0], Z95**2 / (1 + Z95**2), rtol=1e-12)
+    np.testing.assert_allclose(prob["lo"][0, 1], 1 / (1 + Z95**2), rtol=1e-12)
+    with pytest.raises(ValueError, match=r"^over = 'seed' is not a grid axis of this sweep \(axes: "):
+        sub.probability("seed")
+    zipped = SweepResult(sub.inputs, sub.outputs, (12,), sub.names, sub.meta)  # members, not a grid
+    with pytest.raises(ValueError, match="not a grid axis"):
+        zipped.probability("realization")
+
+
+def test_wilson_interval_at_the_edges_by_hand():
+    # 0 of n: (0, z²/(n + z²)); n of n: (n/(n + z²), 1); n = 1 included
+    for z in (Z95, Z90, 2.576):
+        for n in (1, 2, 7):
+            lo, hi = jr.wilson_interval(np.array([0, n]), np.array([n, n]), z=z)
+            np.testing.assert_allclose(lo, [0.0, n / (n + z * z)], rtol=1e-12, atol=1e-15)
+            np.testing.assert_allclose(hi, [z * z / (n + z * z), 1.0], rtol=1e-12, atol=1e-15)
+    lo, hi = jr.wilson_interval(0, 0)
+    assert np.isnan(lo) and np.isnan(hi)  # no member counted: no interval
+    # counts given in single precision (a JAX array without x64) still give double-precision bounds
+    lo, hi = jr.wilson_interval(np.float32(2), np.float32(3))
+    np.testing.assert_allclose([lo, hi], _wilson_by_hand(2, 3, Z95), rtol=1e-12)
+
+
+def test_to_xarray_coordinates_values_and_attrs_of_a_hand_grid(monkeypatch):
+    res = _hand_grid()
+    ds = res.to_xarray()
+    assert tuple(ds.sizes.items()) == (("dF", 2), ("amplitude", 2), ("realization", 3))
+    np.testing.assert_array_equal(ds["dF"].values, [2.0, 20.0])
+    np.testing.assert_array_equal(ds["amplitude"].values, [0.005, 0.05])
+    np.testing.assert_array_equal(ds["realization"].values, [0, 1, 2])
+    assert set(ds.data_vars) == set(res.outputs) | {"index"}
+    for i in range(len(res)):  # each member found by its own labels
+        at = {k: res.inputs[k][i] for k in res.names}
+        assert int(ds["index"].sel(at)) == i
+        for k, v in res.outputs.items():
+            assert ds[k].sel(at).item() == v[i], (k, i)
+    # metadata: plain values as they are, nested ones as JSON text, private ones ("_…") left out
+    assert ds.attrs["seed"] == 3 and ds.attrs["dt"] == 1e-5 and ds.attrs["combine"] == "grid"
+    assert json.loads(ds.attrs["spec"]) == {"model": "field", "n": 16}
+    assert json.loads(ds.attrs["devices"]) == ["cpu:0"]
+    assert not any(k.startswith("_") for k in ds.attrs)
+    assert set(ds.attrs) == {"spec", "names", "shape", "full_shape", "seed", "dt", "combine", "devices"}
+    # a NumPy value in the metadata is written as text
+    odd = SweepResult(res.inputs, res.outputs, res.shape, res.names, {"shape": [np.int64(2), np.float32(0.5)]})
+    assert json.loads(odd.to_xarray().attrs["shape"]) == ["2", "0.5"]
+    # a grid with an axis of one value
+    sub = SweepResult({k: v[:3] for k, v in res.inputs.items()}, {k: v[:3] for k, v in res.outputs.items()},
+                      (1, 1, 3), res.names, {})
+    ds1 = sub.to_xarray()
+    np.testing.assert_array_equal(ds1["dF"].values, [2.0])
+    np.testing.assert_array_equal(ds1["amplitude"].values, [0.005])
+    np.testing.assert_array_equal(ds1["buckled"].values, [[[False, False, False]]])
+    # a zipped result: one member dimension, the inputs as its coordinates
+    zipped = SweepResult(res.inputs, res.outputs, (12,), res.names, {"combine": "zip"})
+    dz = zipped.to_xarray()
+    assert tuple(dz.sizes.items()) == (("member", 12),) and dz.attrs == {"combine": "zip"}
+    assert set(dz.coords) == {"dF", "amplitude", "realization", "index"}
+    np.testing.assert_array_equal(dz["dF"].values, res.inputs["dF"])
+    np.testing.assert_array_equal(dz["realization"].values, np.tile([0, 1, 2], 4))
+    for k, v in res.outputs.items():
+        np.testing.assert_array_equal(dz[k].values, v, err_msg=k)
+    # without xarray: the error says what to install
+    monkeypatch.setitem(sys.modules, "xarray", None)
+    with pytest.raises(ImportError, match=r"^SweepResult\.to_xarray needs xarray: pip install 'jaxrod\[xarray\]'$"):
+        res.to_xarray()
+
+
+def test_concatenate_member_ranges_of_a_hand_grid():
+    whole = _hand_grid()
+
+    def part(lo, hi):
+        meta = {**whole.meta, "shape": [hi - lo], "members": [lo, hi]}
+        return SweepResult({k: v[lo:hi] for k, v in whole.inputs.items()},
+                           {k: v[lo:hi] for k, v in whole.outputs.items()}, (hi - lo,), whole.names, meta)
+
+    for parts in ([part(8, 12), part(0, 5), part(5, 8)], [part(0, 12)]):  # several hosts, or one
+        joined = SweepResult.concatenate(parts)
+        assert joined.shape == (2, 2, 3) and joined.names == ("dF", "amplitude", "realization")
+        assert joined.meta["seed"] == 3 and joined.meta["spec"] == {"model": "field", "n": 16}
+        assert set(joined.inputs) == set(whole.inputs) and set(joined.outputs) == set(whole.outputs)
+        np.testing.assert_array_equal(joined.inputs["index"], np.arange(12))
+        np.testing.assert_array_equal(joined.inputs["dF"], np.repeat([2.0, 20.0], 6))
+        np.testing.assert_array_equal(joined.inputs["realization"], np.tile([0, 1, 2], 4))
+        for k, v in whole.outputs.items():
+            np.testing.assert_array_equal(joined.outputs[k], v, err_msg=k)
+        np.testing.assert_array_equal(joined.probability()["buckled"], [[0, 2], [1, 0]])
+    # results without a full grid shape in their metadata join as a list of members
+    a, b = (SweepResult({"x": np.array(v, float), "index": np.array(i)}, {"result": np.zeros(len(i), int)},
+                        (len(i),), ("x",), {}) for v, i in (([3.0], [1]), ([1.0, 2.0], [0, 2])))
+    joined = SweepResult.concatenate([a, b])
+    assert joined.shape == (3,) and joined.names == ("x",)
+    np.testing.assert_array_equal(joined.inputs["x"], [1.0, 3.0, 2.0])
+
+
+def test_load_reads_a_folder_in_its_documented_layout(tmp_path, monkeypatch):
+    """`sweep.json` plus one `chunk_XXXXX.npz` per finished chunk (store.py): 5 members in
+    chunks of 2, the middle chunk not finished — its members read as not run (result −1)."""
+    with pytest.raises(FileNotFoundError, match="^no sweep metadata at "):
+        SweepResult.load(str(tmp_path / "nothing"))
+    meta = {"names": ["x"], "shape": [5], "chunk_size": 2, "seed": 7,
+            "_inputs": {"x": [0.1, 0.2, 0.3, 0.4, 0.5], "index": [0, 1, 2, 3, 4]}}
+    (tmp_path / "sweep.json").write_text(json.dumps(meta))
+    np.savez(tmp_path / "chunk_00000.npz", result=np.array([0, 0]), buckled=np.array([True, False]))
+    np.savez(tmp_path / "chunk_00002.npz", result=np.array([4]), buckled=np.array([False]))
+    looked = []
+    chunk_file = result_module._chunk_file
+    monkeypatch.setattr(result_module, "_chunk_file", lambda p, c: looked.append(c) or chunk_file(p, c))
+    res = SweepResult.load(str(tmp_path))
+    assert looked == [0, 1, 2]  # the chunks of 5 members, no more
+    assert res.shape == (5,) and res.names == ("x",) and res.meta["seed"] == 7 and res.meta["chunk_size"] == 2
+    np.testing.assert_array_equal(res.inputs["x"], [0.1, 0.2, 0.3, 0.4, 0.5])
+    np.testing.assert_array_equal(res.outputs["result"], [0, 0, -1, -1, 4])
+    np.testing.assert_array_equal(res.outputs["buckled"], [True, False, False, False, False])
+    assert np.all(np.isinf(res.outputs["t_buckle"]))
