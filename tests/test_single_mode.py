@@ -249,3 +249,65 @@ def test_tanh_tends_to_the_sharp_law_on_short_horizons():
     np.testing.assert_allclose(errs[:, 0], errs[:, 1], rtol=1e-3)  # explicit = implicit
     assert errs[0, 0] > errs[1, 0] > errs[2, 0]
     assert errs[2, 0] < 5e-3
+
+
+# -- The friction laws' updates on values worked out by hand (eager, no compilation) ----------
+
+def test_coulomb_update_by_hand_static_then_dynamic_bound():
+    """h = 0.5, f_s = 3, f_d = 2: a point at rest holds while |v_trial| ≤ h·f_s = 1.5, a moving
+    one stops while |v_trial| ≤ h·f_d = 1; a slipping one loses h·f_d = 1 of speed (all exact in
+    binary)."""
+    h, f_s, f_d = 0.5, jnp.asarray(3.0), jnp.asarray(2.0)
+    v = jnp.asarray([0.0, 1.25, 1.5, -1.5, 1.75, -1.75, 0.75, 1.0, -1.0, 1.25, -1.25, 3.0])
+    prev = jnp.asarray([0.0] * 6 + [0.1, 0.1, -0.2, 0.1, -0.1, 0.1])
+    want = [0.0, 0.0, 0.0, 0.0, 0.75, -0.75, 0.0, 0.0, 0.0, 0.25, -0.25, 2.0]
+    for law in (jr.coulomb_prox, jr.Coulomb().update):
+        out = law(v, prev, h, f_s, f_d)
+        np.testing.assert_array_equal(out, want)
+        assert out.dtype == v.dtype
+    np.testing.assert_array_equal(jr.Coulomb().acceleration(jnp.asarray([-2.0, 0.0, 3.0]), f_s, f_d), [-2.0, 0.0, 2.0])
+
+
+def test_tanh_update_acceleration_and_vector_impulse_by_hand():
+    law = jr.Tanh(0.5)
+    f_d, h = jnp.asarray(2.0), 0.1
+    v = jnp.asarray([-1.0, 0.0, 0.5, 4.0])
+    want_a = [2.0 * math.tanh(v_ / 0.5) for v_ in (-1.0, 0.0, 0.5, 4.0)]
+    np.testing.assert_allclose(law.acceleration(v, f_d, f_d), want_a, rtol=1e-15)
+    # no static bound: the update is the explicit step v − h·f_d·tanh(v/ε), whatever v_prev
+    np.testing.assert_allclose(law.update(v, jnp.zeros(4), h, jnp.asarray(9.0), f_d),
+                               [v_ - h * a for v_, a in zip((-1.0, 0.0, 0.5, 4.0), want_a)], rtol=1e-15)
+    # the vector impulse: norm bound·tanh(|u|/ε), against u; |u| = 5, 0.05 (x = |u|/ε = 10, 0.1)
+    # and 5e-6 (x = 1e-5, the series branch), with bound 0.3
+    b = jnp.asarray([0.3, 0.3, 0.3])
+    u = (jnp.asarray([3.0, 0.03, 3e-6]), jnp.asarray([-4.0, 0.04, 4e-6]))
+    (p1, p2), sticks = law.impulse_2d(u, (jnp.ones(3), jnp.zeros(3), jnp.ones(3)), b, b)
+    for i, (norm, x) in enumerate(((5.0, 10.0), (0.05, 0.1), (5e-6, 1e-5))):
+        mag = 0.3 * math.tanh(x)
+        np.testing.assert_allclose([p1[i], p2[i]], [-mag * float(u[0][i]) / norm, -mag * float(u[1][i]) / norm],
+                                   rtol=1e-14, err_msg=f"|u| = {norm}")
+    assert sticks.dtype == bool and not np.asarray(sticks).any()
+    # the 3D rod's friction pass may run in single precision: the impulse stays in it
+    u32 = tuple(c.astype(jnp.float32) for c in u)
+    b32 = b.astype(jnp.float32)
+    (q1, q2), _ = law.impulse_2d(u32, tuple(jnp.ones(3, jnp.float32) for _ in range(3)), b32, b32)
+    assert q1.dtype == q2.dtype == jnp.float32
+    np.testing.assert_allclose(q1, p1, rtol=1e-6)
+
+
+def test_vector_coulomb_impulse_with_isotropic_inverse_mass_by_hand():
+    """W = w·I: the point sticks with p = −u/w while |u|/w ≤ the stick bound; else it slips with
+    the impulse of the slip bound against u; a zero slip bound gives no impulse."""
+    w = 2.0
+    u = (jnp.asarray([0.3, 3.0, -6.0, 3.0, 1.0]), jnp.asarray([0.4, 4.0, 8.0, 4.0, 0.0]))  # |u| = 0.5, 5, 10, 5, 1
+    stick = jnp.asarray([0.25, 2.5, 1.0, 1.0, 0.4])  # |u|/w = 0.25, 2.5, 5, 2.5, 0.5
+    slip = jnp.asarray([0.2, 2.0, 0.8, 0.0, 0.3])
+    W = (jnp.full(5, w), jnp.zeros(5), jnp.full(5, w))
+    (p1, p2), sticks = jr.Coulomb().impulse_2d(u, W, stick, slip)
+    np.testing.assert_array_equal(sticks, [True, True, False, False, False])
+    np.testing.assert_allclose(p1, [-0.15, -1.5, 0.8 * 0.6, 0.0, -0.3], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(p2, [-0.2, -2.0, -0.8 * 0.8, 0.0, 0.0], rtol=1e-12, atol=1e-15)
+    # started from a guess (the last sweep's impulse), the same answer
+    (g1, g2), _ = jr.Coulomb().impulse_2d(u, W, stick, slip, guess=(jnp.full(5, 0.1), jnp.full(5, -0.1)))
+    np.testing.assert_allclose(g1, p1, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(g2, p2, rtol=1e-12, atol=1e-15)
