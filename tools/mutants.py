@@ -36,13 +36,27 @@ GROUPS = {
     # the rest of test_rod3d.py compiles rods for tens of seconds and tests the law only through them
     "friction": (["jaxrod/friction.py"], ["tests/test_single_mode.py", "tests/test_leapfrog.py",
                  "tests/test_rod3d.py::test_vector_coulomb_impulse_minimises_the_kinetic_energy_over_the_disc"]),
-    "perturbations": (["jaxrod/perturbations.py"], ["tests/test_fidelity.py", "tests/test_field.py"]),
+    # the tests of the perturbations themselves; left out: test_fidelity's ΔF* convergence in n
+    # (boundary searches on up to 768 nodes) and the rest of test_field.py (runs of the field
+    # model that merely start from a perturbation), minutes per mutant for no other check of it
+    "perturbations": (["jaxrod/perturbations.py"], [
+        "tests/test_fidelity.py::test_modal_amplitudes_do_not_depend_on_the_model_resolution",
+        "tests/test_fidelity.py::test_the_scene_field_on_its_own_grid_is_the_nodal_draw",
+        "tests/test_fidelity.py::test_galerkin_and_single_mode_get_the_same_modes",
+        "tests/test_fidelity.py::test_the_3d_rod_gets_the_same_modes_at_its_nodes",
+        "tests/test_fidelity.py::test_scene_noise_on_a_small_grid_by_hand",
+        "tests/test_fidelity.py::test_sine_velocity_user_state_and_mode_projection_by_hand",
+        "tests/test_fidelity.py::test_random_force_over_a_duration_that_is_not_a_whole_number_of_steps",
+        "tests/test_field.py::test_random_force_pulse_is_the_exact_forced_response_without_friction",
+        "tests/test_field.py::test_perturbations"]),
     "models": (["jaxrod/models/*"], ["tests/test_single_mode.py", "tests/test_field.py", "tests/test_engine.py"]),
     "rod3d": (["jaxrod/rod3d/energy.py", "jaxrod/rod3d/contact.py", "jaxrod/rod3d/model.py"],
               ["tests/test_rod3d.py", "tests/test_rod3d_contact.py", "tests/test_rod3d_rest.py",
                "tests/test_rod3d_loaded.py"]),
     "boundary": (["jaxrod/boundary/*"], ["tests/test_boundary.py"]),
-    "stability_map": (["jaxrod/stability_map.py"], ["tests/test_cli.py"]),
+    # the map's numbers on hand-built results and one 2 × 2 single-mode map; test_cli.py's
+    # field-model map (sweeps, a boundary search and single scenes) takes a minute per mutant
+    "stability_map": (["jaxrod/stability_map.py"], ["tests/test_mutants_stability_map.py"]),
     "sweeps_result": (["jaxrod/sweeps/result.py"], ["tests/test_sweep.py"]),
 }
 
