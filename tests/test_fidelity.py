@@ -8,7 +8,8 @@ import pytest
 
 import jaxrod as jr
 from jaxrod import boundary as bd
-from jaxrod.perturbations import RandomShape, RandomVelocity, project_to_mode, scene_noise
+from jaxrod.perturbations import (RandomForce, RandomShape, RandomVelocity, SineVelocity, UserState, project_to_mode,
+                                  scene_noise, scene_noise_modes)
 
 ROD = jr.RodChannel.reference(mu=0.3)
 KEY = jax.random.key(7)
@@ -102,3 +103,101 @@ def test_the_3d_rod_gets_the_same_modes_at_its_nodes():
     assert np.all(np.asarray(v.v)[[0, -1]] == 0.0)
     with pytest.raises(ValueError, match="RandomForce is not available with the 3D rod"):
         jr.scene.Scene(ROD, 5.0, jr.perturbations.RandomForce(2.0, KEY), "rod3d", n=40)
+
+
+# -- perturbations on values worked out by hand (eager, no compilation) ------------------------
+
+def _coefficients(r, grid, modes):
+    """c_m = (2/grid) Σ_j r_j sin(mπj/grid), in NumPy."""
+    j = np.arange(1, grid)
+    return np.array([2 / grid * np.sum(r * np.sin(np.pi * m * j / grid)) for m in range(1, modes + 1)])
+
+
+def test_scene_noise_on_a_small_grid_by_hand():
+    """grid = 8: the draw on its 7 nodes, its 7 sine coefficients, and the series truncated to
+    the modes asked for (or to what the points resolve, at most grid − 1)."""
+    L, amp = 3.0, 0.015
+    r = np.asarray(jax.random.uniform(KEY, (7,), jnp.float64, -1.0, 1.0)) * amp
+    c = _coefficients(r, 8, 7)
+    got = scene_noise_modes(KEY, amp, 8)
+    assert got.shape == (7,) and got.dtype == jnp.float64
+    np.testing.assert_allclose(got, c, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(scene_noise_modes(KEY, amp, 8, 3), c[:3], rtol=0, atol=1e-15)
+    nodes = jnp.arange(1, 8, dtype=jnp.float64) * (L / 8)
+    np.testing.assert_allclose(scene_noise(KEY, amp, nodes, L, grid=8), r, rtol=0, atol=1e-15)
+
+    def series(s, modes):
+        return np.array([np.sum(c[:modes] * np.sin(np.pi * np.arange(1, modes + 1) * x / L)) for x in s])
+
+    s4 = jnp.asarray([0.2, 1.1, 1.7, 2.9])
+    np.testing.assert_allclose(scene_noise(KEY, amp, s4, L, grid=8), series(s4, 4), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(scene_noise(KEY, amp, s4, L, grid=8, modes=2), series(s4, 2), rtol=0, atol=1e-15)
+    s10 = jnp.linspace(0.1, 2.9, 10)
+    np.testing.assert_allclose(scene_noise(KEY, amp, s10, L, grid=8), series(s10, 7), rtol=0, atol=1e-15)
+    # per-point noise (grid=None): a uniform draw at the points themselves
+    np.testing.assert_array_equal(scene_noise(KEY, amp, s4, L, grid=None),
+                                  jax.random.uniform(KEY, (4,), jnp.float64, -1.0, 1.0) * amp)
+    # a grid of two segments has one node and one mode; fewer, or not an int, is refused
+    np.testing.assert_allclose(scene_noise(KEY, amp, s4, L, grid=2),
+                               float(jax.random.uniform(KEY, (1,), jnp.float64, -1.0, 1.0)[0]) * amp
+                               * np.sin(np.pi * np.asarray(s4) / L), rtol=0, atol=1e-15)
+    for bad in (1, 0, 8.0):
+        with pytest.raises(ValueError, match=rf"^grid = {bad!r} is invalid: expected an int >= 2 \(segments\) or None\.$"):
+            scene_noise(KEY, amp, s4, L, grid=bad)
+
+
+def test_sine_velocity_user_state_and_mode_projection_by_hand():
+    rod = ROD
+    R = float(rod.R)
+    # 5 nodes at s = jL/6: mode 3 is sin(πj/2) = 1, 0, −1, 0, 1
+    m5 = jr.FieldModel.from_rod(rod, 5, dF=5.0)
+    q, v = SineVelocity(0.01, 3).initial_state(m5)
+    np.testing.assert_array_equal(q, np.zeros(5))
+    np.testing.assert_allclose(v, np.array([1, 0, -1, 0, 1]) * 0.01 / R, rtol=1e-14, atol=1e-13)
+    # the default mode is 6: on 11 nodes (s = jL/12) sin(πj/2) again
+    q, v = SineVelocity(0.02).initial_state(jr.FieldModel.from_rod(rod, 11, dF=5.0))
+    np.testing.assert_allclose(v, np.array([1, 0, -1, 0] * 2 + [1, 0, -1]) * 0.02 / R, rtol=1e-14, atol=1e-13)
+    assert SineVelocity(1, 2).v0.dtype == jnp.float64 and SineVelocity(1, 2).mode.dtype == jnp.float64
+    # a state given in the model's coordinates is the initial state as it is; its fields are in metres
+    q0, v0 = jnp.asarray([0.1, -0.2, 0.0, 0.3, 0.05]), jnp.asarray([1.0, 0.0, -2.0, 0.5, 0.25])
+    us = UserState(q0, v0)
+    q, v = us.initial_state(m5)
+    np.testing.assert_array_equal(q, q0)
+    np.testing.assert_array_equal(v, v0)
+    y, u = us.fields(m5)
+    np.testing.assert_allclose(y, np.asarray(q0) * R, rtol=1e-15)
+    np.testing.assert_allclose(u, np.asarray(v0) * R, rtol=1e-15)
+    # discrete orthogonality on 7 nodes: 0.3 sin(2πj/8) + 0.1 sin(5πj/8) has amplitudes 0.3, 0.1
+    j = jnp.arange(1, 8, dtype=jnp.float64)
+    theta = 0.3 * jnp.sin(2 * jnp.pi * j / 8) + 0.1 * jnp.sin(5 * jnp.pi * j / 8)
+    np.testing.assert_allclose([float(project_to_mode(theta, m)) for m in (1, 2, 3, 5)], [0.0, 0.3, 0.0, 0.1],
+                               rtol=0, atol=1e-15)
+    assert float(project_to_mode(theta, 2.0)) == pytest.approx(0.3, abs=1e-15)  # a float mode too
+
+
+def test_random_force_over_a_duration_that_is_not_a_whole_number_of_steps():
+    """The forcing phase lasts exactly `duration` (1.3 ms with a 0.1 ms step: 13 steps of 0.1 ms
+    would fall short or overshoot by rounding; 14 of 1.3/14 ms are taken): on the frictionless
+    loaded rod the shape equals the exact forced response (matrix exponential) within the
+    scheme's error, and a zero duration leaves the rod straight."""
+    import scipy.linalg as sl
+
+    rod = ROD.with_friction(0.0, 0.0)
+    model = jr.FieldModel.from_rod(rod, 16, dF=5.0)
+    for duration in (1.3e-3,):
+        pert = RandomForce(2.0, KEY, duration=duration)
+        q, v = pert.initial_state(model, jr.ProjectedVerlet(1e-4))
+        assert np.all(np.asarray(v) == 0)
+        force, _ = pert.fields(model)
+        ext = np.asarray(force) / float(rod.rho * rod.R)
+        zero = jnp.zeros(16)
+        A = np.asarray(jax.jacfwd(lambda x: model.acceleration(x, 0.0))(zero))
+        n = 16
+        M = np.zeros((2 * n + 1, 2 * n + 1))
+        M[:n, n:2 * n], M[n:2 * n, :n], M[n:2 * n, 2 * n] = np.eye(n), A, ext + np.asarray(model.acceleration(zero, 0.0))
+        exact = (sl.expm(M * duration) @ np.r_[np.zeros(2 * n), 1.0])[:n]
+        err = np.max(np.abs(np.asarray(q) - exact)) / np.max(np.abs(exact))
+        print(f"duration {duration}: relative error {err:.2e}")
+        assert err < 2e-3
+    q, v = RandomForce(2.0, KEY, duration=0.0).initial_state(model, jr.ProjectedVerlet(1e-4))
+    np.testing.assert_array_equal(q, np.zeros(16))

@@ -1,0 +1,204 @@
+"""The stability map's numbers on inputs built by hand: the boundary read off a grid, the power-law
+fit, the single-mode theory curve, the summary and CSV rows of a map, and what its figure shows.
+Quick (no sweep compiles except one 2 × 2 single-mode map), so the mutation group
+`stability_map` (tools/mutants.py) runs them for every mutant; `tests/test_cli.py::test_map_main_job`
+checks a real field-model map end to end."""
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod import stability_map as sm
+from jaxrod.sweeps import SweepResult
+
+V0 = np.array([1e-3, 4e-3, 1.6e-2, 6.4e-2])
+
+
+def test_grid_boundary_by_hand():
+    """Per ΔF column: the geometric mean of the last stable and the first buckled v₀, only for
+    a monotone column with both labels and no failed member."""
+    dF = np.array([1.0, 2.0, 3.0, 4.0, 5.0, 6.0])
+    F, T = False, True
+    buckled = np.array([[F, F, T, T],   # boundary between 4e-3 and 1.6e-2
+                        [F, T, F, T],   # not monotone
+                        [F, F, F, F],   # all stable
+                        [T, T, T, T],   # all buckled
+                        [F, F, F, T],   # a failed member in the column
+                        [F, T, T, T]])  # boundary between 1e-3 and 4e-3
+    ok = np.ones_like(buckled)
+    ok[4, 2] = False
+    dF_b, v_b, lo, hi = sm.grid_boundary(dF, V0, buckled, ok)
+    np.testing.assert_array_equal(dF_b, [1.0, 6.0])
+    np.testing.assert_allclose(v_b, [8e-3, 2e-3], rtol=1e-15)
+    np.testing.assert_array_equal(lo, [4e-3, 1e-3])
+    np.testing.assert_array_equal(hi, [1.6e-2, 4e-3])
+    none = sm.grid_boundary(dF[1:5], V0, buckled[1:5], ok[1:5])
+    assert len(none) == 4 and all(isinstance(c, np.ndarray) and c.size == 0 for c in none)
+
+
+def test_fit_power_law_by_hand():
+    # exact power law y = 3 x^−½: exponent, prefactor, zero standard error
+    p, se, c = sm.fit_power_law([1.0, 4.0, 16.0, 64.0], [3.0, 1.5, 0.75, 0.375])
+    assert p == pytest.approx(-0.5, abs=1e-14) and c == pytest.approx(3.0, rel=1e-14) and se < 1e-14
+    # (1, 1), (2, 2), (4, 8) in logs: slope 3/2, intercept −(ln 2)/6, residuals (1, −2, 1)(ln 2)/6,
+    # so the slope's standard error is √((ln²2/6)/1 / (2 ln²2)) = √(1/12)
+    p, se, c = sm.fit_power_law(np.array([1, 2, 4]), np.array([1, 2, 8]))
+    assert p == pytest.approx(1.5, rel=1e-14) and c == pytest.approx(2 ** (-1 / 6), rel=1e-14)
+    assert se == pytest.approx(math.sqrt(1 / 12), rel=1e-12)
+    # two points: the line through them, no standard error; fewer: nothing
+    p, se, c = sm.fit_power_law([2.0, 8.0], [5.0, 2.5])
+    assert p == pytest.approx(-0.5, rel=1e-14) and c == pytest.approx(5.0 * math.sqrt(2.0), rel=1e-14)
+    assert math.isnan(se)
+    for x, y in (([2.0], [5.0]), ([], [])):
+        assert all(math.isnan(v) for v in sm.fit_power_law(x, y))
+
+
+def _theory_by_hand(rod, dF):
+    """P6 for mode 6 at F = F⁰₆ + ΔF: k₆ = −(6π/L)² ΔF/ρ and f = 4μN/(πρR) with N = ρg, so
+    v = R f/√|k₆| = (4μg/π)(L/6π)√(ρ/ΔF)."""
+    return 4 * float(rod.mu_d) * float(rod.g) / math.pi * float(rod.L) / (6 * math.pi) * np.sqrt(float(rod.rho) / np.asarray(dF))
+
+
+def test_theory_boundary_is_the_single_mode_formula():
+    rod = jr.RodChannel.reference(0.3)
+    dF = np.array([0.5, 2.0, 8.0])
+    np.testing.assert_allclose(sm.theory_boundary(rod, dF), _theory_by_hand(rod, dF), rtol=1e-12)
+    np.testing.assert_allclose(sm.theory_boundary(rod, dF, mode=6), _theory_by_hand(rod, dF), rtol=1e-12)
+    # another mode: its own stiffness at the same load, k₅ = (5π/L)²/ρ (F⁰₅ − F⁰₆ − ΔF)
+    om5 = 5 * math.pi / float(rod.L)
+    om6 = 6 * math.pi / float(rod.L)
+    F05 = float(rod.EI) * om5**2 + float(rod.w) / (float(rod.R) * om5**2)
+    F06 = float(rod.EI) * om6**2 + float(rod.w) / (float(rod.R) * om6**2)
+    k5 = om5**2 / float(rod.rho) * (F05 - F06 - dF)
+    f = 4 * 0.3 * float(rod.g) / (math.pi * float(rod.R))
+    np.testing.assert_allclose(sm.theory_boundary(rod, dF, mode=5), float(rod.R) * f / np.sqrt(-k5), rtol=1e-12)
+
+
+def _map(mu):
+    """A 3 × 4 map (ΔF × v₀), C order. Labels per ΔF row (v₀ rising):
+    ΔF = 1: - - B B;  ΔF = 2: - B B B;  ΔF = 4: B B B B, the second failed (code 1): 8 buckled,
+    3 stable, 1 failed."""
+    dF = np.array([1.0, 2.0, 4.0])
+    F, T = False, True
+    buckled = np.array([F, F, T, T, F, T, T, T, T, T, T, T])
+    result = np.zeros(12, int)
+    result[9] = 1
+    inputs = {"dF": np.repeat(dF, 4), "amplitude": np.tile(V0, 3), "index": np.arange(12)}
+    outputs = {"buckled": buckled, "t_buckle": np.where(buckled, 0.1, np.inf), "dominant_mode": np.full(12, 6),
+               "max_theta": np.linspace(0.01, 0.12, 12), "final_theta": np.zeros(12), "stuck": ~buckled,
+               "t_stop": np.where(buckled, np.nan, 0.2), "result": result, "steps": np.full(12, 100)}
+    return dF, SweepResult(inputs, outputs, (3, 4), ("dF", "amplitude"), {"n": 32, "dt": 1e-5})
+
+
+def test_summary_of_a_hand_map():
+    dF, res = _map(0.3)
+    s = sm._summarise(res, dF, V0, 0.3)
+    F0cr = 2 * math.sqrt(float(jr.RodChannel.reference(0.3).w * jr.RodChannel.reference(0.3).EI
+                                 / jr.RodChannel.reference(0.3).R))
+    assert s["mu"] == 0.3 and s["members"] == 12 and s["buckled"] == 8 and s["stable"] == 3 and s["failed"] == 1
+    assert s["boundary_dF"] == [1.0, 2.0]
+    np.testing.assert_allclose(s["boundary_v0"], [8e-3, 2e-3], rtol=1e-15)
+    assert s["boundary_v0_lo"] == [4e-3, 1e-3] and s["boundary_v0_hi"] == [1.6e-2, 4e-3]
+    # two boundary points: the exponent of the line through them, (ln 2e-3 − ln 8e-3)/ln 2 = −2
+    assert s["exponent"] == pytest.approx(-2.0, rel=1e-12) and math.isnan(s["exponent_stderr"])
+    assert s["prefactor"] == pytest.approx(8e-3, rel=1e-12)
+    assert s["largest_stable_dF_over_F0cr"] == pytest.approx(2.0 / F0cr, rel=1e-12)
+    assert s["F0cr_continuous"] == pytest.approx(F0cr, rel=1e-12)
+    assert s["buckles_for_every_dF_gt_0"] is False
+    # a frictionless-like map: everything buckles, no stable column, no boundary
+    allb = SweepResult(res.inputs, {**res.outputs, "buckled": np.ones(12, bool), "result": np.zeros(12, int)},
+                       res.shape, res.names, res.meta)
+    s = sm._summarise(allb, dF, V0, 0.0)
+    assert s["buckles_for_every_dF_gt_0"] is True and s["largest_stable_dF_over_F0cr"] is None
+    assert s["stable"] == 0 and s["buckled"] == 12 and s["boundary_dF"] == [] and math.isnan(s["exponent"])
+    # loads at or below the reference: no positive ΔF to judge
+    s = sm._summarise(allb, np.array([-1.0, 0.0, 0.0]), V0, 0.0)
+    assert s["buckles_for_every_dF_gt_0"] is None
+
+
+def test_map_rows_are_the_members_numbers():
+    dF, res = _map(0.3)
+    rows = sm._map_rows({0.3: res, 0.0: res})
+    assert len(rows) == 24
+    assert list(rows[0]) == ["mu", "dF", "v0", "buckled", "t_buckle", "dominant_mode", "max_theta", "stuck",
+                             "t_stop", "result"]
+    r = rows[9]  # ΔF = 4, v₀ = 4e-3: the failed member
+    assert (r["mu"], r["dF"], r["v0"], r["buckled"], r["result"]) == (0.3, 4.0, 4e-3, True, 1)
+    assert r["t_buckle"] == 0.1 and r["dominant_mode"] == 6 and r["max_theta"] == pytest.approx(0.1)
+    assert rows[1]["stuck"] and rows[1]["t_stop"] == 0.2
+    assert rows[12]["mu"] == 0.0 and rows[12]["dF"] == 1.0 and rows[12]["v0"] == 1e-3
+
+
+def test_plot_shows_the_members_theory_fit_and_searched_curve(tmp_path):
+    dF, res = _map(0.3)
+    s = sm._summarise(res, dF, V0, 0.3)
+    s["curve_v0"], s["curve_rtol"], s["curve_exponent"] = [7e-3, None, 1e-3], 1e-3, -1.5
+    free = sm._summarise(res, dF, V0, 0.0)
+    summary = {"model": "field", "mode": 6, "t1": 2.0, "n": 32, "dt": 1e-5, "dF": dF.tolist(), "v0": V0.tolist(),
+               "maps": {"0.3": s, "0": free}}
+    path = tmp_path / "map.png"
+    fig = sm.plot_maps({0.3: res, 0.0: res}, summary, str(path))
+    assert path.stat().st_size > 10_000
+    assert len(fig.axes) == 2
+    ax = fig.axes[0]
+    stable, buckled, failed = ax.collections
+    np.testing.assert_allclose(stable.get_offsets(), [(1, 1.0), (1, 4.0), (2, 1.0)], rtol=1e-12)
+    offs = np.asarray(buckled.get_offsets())  # the failed member (labelled buckled) is not among them
+    assert len(offs) == 8 and (4.0, 4.0) not in {tuple(o) for o in offs}
+    np.testing.assert_allclose(failed.get_offsets(), [(4.0, 4.0)])
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels[:3] == ["stable (straight)", "buckled", "failed run"]
+    assert "single-mode theory P6 (slope −1/2)" in labels
+    assert "fitted boundary: v0 ∝ ΔF^(-2.000 ± nan)" in labels
+    assert "searched boundary (rtol 0.001): v0* ∝ ΔF^(-1.500)" in labels
+    assert tuple(stable.get_edgecolor()[0][:3]) == pytest.approx((0.1725, 0.6275, 0.1725), abs=1e-3)  # tab:green
+    assert tuple(buckled.get_facecolor()[0][:3]) == pytest.approx((0.8392, 0.1529, 0.1569), abs=1e-3)  # tab:red
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    theory = lines["single-mode theory P6 (slope −1/2)"]
+    x, y = theory.get_data()
+    np.testing.assert_allclose(x, np.geomspace(1.0, 4.0, 200), rtol=1e-12)
+    np.testing.assert_allclose(y, 1e3 * _theory_by_hand(jr.RodChannel.reference(0.3), x), rtol=1e-10)
+    x, y = lines["fitted boundary: v0 ∝ ΔF^(-2.000 ± nan)"].get_data()
+    np.testing.assert_allclose(y, 1e3 * 8e-3 * x**-2.0, rtol=1e-10)
+    pts = [ln for ln in ax.get_lines() if ln.get_marker() == "o"]
+    assert len(pts) == 1
+    np.testing.assert_allclose(np.transpose(pts[0].get_data()), [(1.0, 8.0), (2.0, 2.0)], rtol=1e-12)
+    x, y = lines["searched boundary (rtol 0.001): v0* ∝ ΔF^(-1.500)"].get_data()
+    np.testing.assert_array_equal(x, dF)
+    np.testing.assert_allclose(y, [7.0, np.nan, 1.0], rtol=1e-12)
+    assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
+    np.testing.assert_allclose(ax.get_xlim(), (1.0 / 1.15, 4.0 * 1.15), rtol=1e-12)
+    np.testing.assert_allclose(ax.get_ylim(), (1.0 / 1.2, 64.0 * 1.2), rtol=1e-12)
+    assert ax.get_xlabel() == "ΔF = F − F⁰₆ [N]" and ax.get_ylabel() == "v₀ (sine mode-6 lateral speed) [mm/s]"
+    F0cr = s["F0cr_continuous"]
+    assert ax.get_title() == f"μ = 0.3: 8 buckled, 3 stable\nstraight up to ΔF = {2.0 / F0cr:.1f} F⁰cr"
+    # the frictionless panel: no theory, fit or searched curve
+    assert fig.axes[1].get_lines() == [] and fig.axes[1].get_title().startswith("μ = 0: ")
+    assert fig._suptitle.get_text() == ("Stability map, reference rod, field model (n = 32, dt = 1.00e-05 s, "
+                                       "horizon 2 s)")
+
+
+def test_a_small_single_mode_map_end_to_end(tmp_path):
+    """2 × 2 map of the single-mode model (cheap to compile): labels against the single-mode
+    theory's stable zone, and the files it writes."""
+    rod = jr.RodChannel.reference(0.3)
+    dF, v0 = [1.0, 16.0], [2e-3, 0.1]
+    s = sm.stability_map(mus=(0.3,), dF=dF, v0=v0, model="mode", out=str(tmp_path), progress=False, t1=0.5)
+    # P6 at ΔF = 1, 16: v_cr = 64 and 16 mm/s, so 2 mm/s stays and 100 mm/s buckles at both loads
+    assert list(_theory_by_hand(rod, dF) * 1e3) == pytest.approx([63.67, 15.92], rel=1e-3)
+    m = s["maps"]["0.3"]
+    assert (m["members"], m["buckled"], m["stable"], m["failed"]) == (4, 2, 2, 0)
+    assert m["boundary_dF"] == dF and m["boundary_v0"] == pytest.approx([math.sqrt(2e-3 * 0.1)] * 2, rel=1e-12)
+    assert "curve_v0" not in m  # no searched curve for the single-mode model
+    assert s["model"] == "mode" and s["mode"] == 6 and s["t1"] == 0.5 and s["dF"] == dF and s["v0"] == v0
+    assert s["n"] is None and 0 < s["dt"] < 1e-3  # the single mode has no nodes
+    assert json.loads((tmp_path / "map.json").read_text()) == json.loads(json.dumps(s))
+    with open(tmp_path / "map.csv") as fh:
+        rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    assert [(float(r["dF"]), float(r["v0"]), r["buckled"]) for r in rows] == [
+        (1.0, 2e-3, "0"), (1.0, 0.1, "1"), (16.0, 2e-3, "0"), (16.0, 0.1, "1")]
+    assert (tmp_path / "map.png").exists() and (tmp_path / "sweep_mu0.3" / "sweep.json").exists()
