@@ -61,10 +61,10 @@ def simulate(
     checked = (isinstance(integrator, AbstractFixedStep) and _is_concrete(model)
                and _is_concrete(dataclasses.replace(integrator, dt=1.0)))
     if checked:
-        # eagerly: the limit is 2/ω_max of the model (closed form for the reduced models; for the
-        # 3D rod its one compiled power iteration, shared with `Scene.step` and the sweeps). Inside
-        # a caller's jit it is staged: then computed at trace time (a context in which JAX
-        # compiles a jitted function anew, so only there)
+        # eagerly: the limit is 2/ω_max of the model, in closed form for every model (the 3D
+        # rod's: `jaxrod.rod3d.stiffness.frequency_bound`, in NumPy). Inside a caller's jit it is
+        # staged: then computed at trace time (a context in which JAX compiles a jitted function
+        # anew, so only there)
         if isinstance(jnp.zeros(()) + 0.0, jax.core.Tracer):  # staged: inside a caller's jit
             with jax.ensure_compile_time_eval():
                 limit = np.asarray(integrator.step_limit(model))
@@ -118,16 +118,15 @@ def _block_size(intervals: int) -> int:
 @eqx.filter_jit
 def _start(model, integrator, q0, v0, t1, n_save, options):
     s0 = integrator.start(model, q0, v0, options)
-    return s0, integrator.record(model, s0, integrator.save_step(t1, n_save), options)
+    return s0, integrator.record(model, s0, s0.v, options)
 
 
 @eqx.filter_jit
 def _saves(model, integrator, s, first, count, t1, n_save, options, checked):
     """A block of save intervals, and what the solution needs of the state after it (the
     velocity at the positions and the result code: the last block's are the run's)."""
-    s, recs = integrator.run_saves(model, s, first, count, t1, n_save, options)
+    s, recs, v_final = integrator.run_saves(model, s, first, count, t1, n_save, options)
     h = integrator.save_step(t1, n_save)
-    v_final = integrator.velocity_at(model, s.q, s.v, s.a, s.t, h)
     code = integrator.result(model, s, h, check_step_limit=not checked)
     code = jnp.where(model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
     return s, recs, v_final, code

@@ -244,17 +244,18 @@ class AbstractFixedStep(AbstractIntegrator):
 
     def integrate(self, model, q0, v0, t1, n_save, options=RunOptions(), check_step_limit=True):
         s0 = self.start(model, q0, v0, options)
-        s, recs = self.run_saves(model, s0, 0, n_save - 1, t1, n_save, options)
-        return self.solution(model, s0, s, recs, t1, n_save, options, check_step_limit)
+        s, recs, v_final = self.run_saves(model, s0, 0, n_save - 1, t1, n_save, options)
+        return self.solution(model, s0, s, recs, v_final, t1, n_save, options, check_step_limit)
 
     def save_step(self, t1, n_save):
         """The step a run to `t1` with `n_save` saves takes [s] (`save_grid`), as an array."""
         return jnp.asarray(save_grid(t1, n_save, self.dt)[1], jnp.result_type(float))
 
-    def record(self, model, s: RunState, h, options: RunOptions) -> dict:
-        """What a save records of the run state `s` (the step `h` gives the velocity at the
-        positions for a scheme that carries the half step's)."""
-        s = eqx.tree_at(lambda r: r.v, s, self.velocity_at(model, s.q, s.v, s.a, s.t, h))
+    def record(self, model, s: RunState, v_at, options: RunOptions) -> dict:
+        """What a save records of the run state `s`, with `v_at` the velocity at its positions
+        (`velocity_at`: the run's own for a scheme that carries it; at t = 0 `s.v` for every
+        scheme)."""
+        s = eqx.tree_at(lambda r: r.v, s, v_at)
         rec = {
             "stuck": s.stuck,
             "dissipated": sum(jnp.sum(x) for x in jax.tree_util.tree_leaves(s.dissipated)),
@@ -269,8 +270,10 @@ class AbstractFixedStep(AbstractIntegrator):
 
     def run_saves(self, model, s: RunState, first, count: int, t1, n_save: int, options: RunOptions):
         """`count` save intervals (static) of a run to `t1` with `n_save` saves, from the state
-        `s` after save interval `first` (an index, may be traced): the state after them and their
-        records, stacked. `integrate` runs all n_save − 1 at once; [`jaxrod.simulate`][] with a
+        `s` after save interval `first` (an index, may be traced): the state after them, their
+        records, stacked, and the velocity at the last one's positions (`velocity_at`, computed
+        once for the record and the solution: for the 3D rod a friction pass, thousands of
+        operations to compile). `integrate` runs all n_save − 1 at once; [`jaxrod.simulate`][] with a
         progress bar runs them in blocks, reporting between blocks from the host (a compiled
         program that calls back to Python is never written to the compilation cache)."""
         m, _ = save_grid(t1, n_save, self.dt)
@@ -284,35 +287,35 @@ class AbstractFixedStep(AbstractIntegrator):
                 )
             else:
                 s = jax.lax.fori_loop(0, m, lambda _, s: step(s), s)
-            return s, self.record(model, s, h, options)
+            v_at = self.velocity_at(model, s.q, s.v, s.a, s.t, h)
+            return (s, v_at), self.record(model, s, v_at, options)
 
         # the saves in a loop of known length: XLA compiles a loop over an unknown count (a
         # `while` that ends when the run stops) into a slower step (3D rod, 500 segments: 173–176
         # against 161–163 µs per step, benchmarks/README.md). After a stop the remaining saves
         # cost one record each (the state no longer changes: they repeat the last record).
-        def scan_body(s, i):
-            s, rec = interval(s)
+        def scan_body(carry, i):
+            (s, v_at), rec = interval(carry[0])
             if options.progress:
                 jax.debug.callback(progress.tick, i + 1, n_save - 1, s.stopped)
-            return s, rec
+            return (s, v_at), rec
 
         first = jnp.asarray(first)
-        return jax.lax.scan(scan_body, s, first + jnp.arange(count, dtype=first.dtype))
+        (s, v_at), recs = jax.lax.scan(scan_body, (s, s.v), first + jnp.arange(count, dtype=first.dtype))
+        return s, recs, v_at
 
-    def solution(self, model, s0: RunState, s: RunState, recs: dict, t1, n_save: int, options: RunOptions,
-                 check_step_limit: bool = True) -> Solution:
-        """The [`jaxrod.Solution`][] of a run from `s0` that ended at `s` with the records `recs`
-        of its n_save − 1 save intervals."""
+    def solution(self, model, s0: RunState, s: RunState, recs: dict, v_final, t1, n_save: int,
+                 options: RunOptions, check_step_limit: bool = True) -> Solution:
+        """The [`jaxrod.Solution`][] of a run from `s0` that ended at `s` (velocity at its
+        positions `v_final`) with the records `recs` of its n_save − 1 save intervals."""
         h = self.save_step(t1, n_save)
         recs = jax.tree_util.tree_map(lambda x0, xs: jnp.concatenate([x0[None], xs]),
-                                      self.record(model, s0, h, options), recs)
-        return s.solution(recs, t1, n_save, self.velocity_at(model, s.q, s.v, s.a, s.t, h),
-                          self.result(model, s, h, check_step_limit))
+                                      self.record(model, s0, s0.v, options), recs)
+        return s.solution(recs, t1, n_save, v_final, self.result(model, s, h, check_step_limit))
 
     def result(self, model, s: RunState, h, check_step_limit: bool = True) -> Array:
         """The [`jaxrod.RESULTS`][] code of a finished run (`check_step_limit=False` when the
-        step was already checked against the limit of the concrete model: for the 3D rod the
-        limit is a power iteration that costs seconds of compilation)."""
+        step was already checked against the limit of the concrete model)."""
         finite = _all_finite((s.q, s.v))
         too_big = h >= self.step_limit(model) if check_step_limit else False
         return jnp.where(

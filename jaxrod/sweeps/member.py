@@ -72,11 +72,9 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
 
     opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
     m, h = save_grid(spec.t1, N_SAVE, dt)
-    # the 3D rod's limit is a power iteration (80 Hessian-vector products: 4 ms per member at
-    # 60 segments, 30 ms at 500, the cost of 120–180 steps on a 2-core CPU); when the sweep
-    # chose dt itself it is half the smallest limit over the sweep's rods at its largest load
-    # (`_rod3d_resolution`), so the members' own check is skipped. A given `spec.dt` is still
-    # checked member by member.
+    # when the sweep chose dt itself for the 3D rod it is half the smallest limit over the sweep's
+    # rods at its largest load (`_rod3d_resolution`), so the members' own check (a closed form,
+    # a few operations) is skipped. A given `spec.dt` is still checked member by member.
     check_limit = not (spec.model == "rod3d" and spec.dt is None)
 
     def setup(p, index, base_key):
