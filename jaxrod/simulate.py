@@ -141,6 +141,9 @@ def _simulate_in_blocks(model, integrator, q0, v0, t1, n_save, options, throw, c
     from .integrators import progress
 
     quiet = dataclasses.replace(options, progress=False)
+    size = next((f" ({getattr(model, k)} {k[2:]})" for k in ("n_segments", "n_nodes", "n_modes") if hasattr(model, k)), "")
+    progress.compiling(f"{type(model).__name__}{size} with {type(integrator).__name__}",
+                       (type(model), type(integrator), size, n_save, jax.tree_util.tree_structure(q0)))
     s0, rec0 = _start(model, integrator, q0, v0, t1, n_save, quiet)
     total = n_save - 1
     size = _block_size(total)

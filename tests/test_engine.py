@@ -84,6 +84,12 @@ def test_a_run_with_a_progress_bar_equals_one_without(early_exit, capfd):
     np.testing.assert_array_equal(runs[0].amplitude, runs[1].amplitude)
     assert float(runs[0].t_buckle) == float(runs[1].t_buckle) and bool(runs[1].buckled)
     assert "run:" in err and "save" in err
+    # before its first compiled call a run says what it compiles, once per process and program
+    compiling = "compiling FieldModel (24 nodes) with ProjectedVerlet"
+    assert early_exit is False or compiling in err.splitlines()[0]
+    jr.simulate(s.model(), s.integrator(), q0, v0, 0.2, n_save=11, throw=False,
+                options=jr.RunOptions(save_state=False, early_exit=early_exit, progress=True))
+    assert "compiling" not in capfd.readouterr().err
 
 
 def test_the_later_saves_of_a_stopped_run_open_no_new_progress_bar(capfd):

@@ -4,9 +4,24 @@ single runs: under `vmap` every member would report)."""
 
 from __future__ import annotations
 
-__all__ = ["tick"]
+__all__ = ["compiling", "tick"]
 
 _BAR = {}
+_SEEN = set()
+
+
+def compiling(what: str, key) -> None:
+    """Host side, before a run's first compiled call: say on stderr that `what` is being compiled
+    (once per `key` and process), so that a terminal is never silent for the seconds that
+    tracing and compilation take (a fraction of a second when the persistent compilation
+    cache has the program)."""
+    if key in _SEEN:
+        return
+    _SEEN.add(key)
+    import sys
+
+    print(f"compiling {what} (seconds the first time; cached after)…", file=sys.stderr, flush=True)
+
 
 
 def tick(done, total, stopped) -> None:
