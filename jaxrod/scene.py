@@ -32,7 +32,7 @@ MODELS = ("mode", "galerkin", "field", "rod3d")
 PERTURBATIONS = ("sine", "random-velocity", "random-position", "random-shape")
 DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence) and `default_nodes`
 DEFAULT_MODES = 32
-DEFAULT_SEGMENTS = 60  # the 3D rod, as E1 and E6 (README: the full model)
+DEFAULT_SEGMENTS = 60  # the 3D rod, as E1 and E6 (docs/rod3d.md)
 ROD3D_DT_FRACTION = 0.5  # of the 3D rod's explicit step limit
 DEFAULT_T1 = 2.0  # s, as the reference paper
 DT_FRACTION = 0.4  # of the explicit step limit
@@ -177,7 +177,7 @@ class Scene(eqx.Module):
         2/ω_max at ΔF = 0 (compression only lowers the highest frequency), and — when the load
         is concrete — at most 0.25/λ_max, λ_max = F/(2√(EIρ)) the fastest growth rate of a
         loaded rod, so that fast-growing modes stay accurately resolved (the convergence study
-        in benchmarks/README.md: dt changes v₀* by < 0.1 % once λ_max·dt ≤ 0.3)."""
+        in benchmarks/README.md, field_convergence: v₀* within 0.1 % below 0.4 of the limit at n = 64)."""
         if self.dt is not None:
             return float(self.dt)
         if self.kind == "mode":

@@ -44,7 +44,7 @@ def test_each_model_through_simulate_under_jit_and_vmap_equals_its_single_runs(k
         assert int(batch.n_steps[i]) == int(one.n_steps)
         # the 3D rod's friction pass computes in float32, and the batched compilation rounds
         # differently from the unbatched one (1.6e-7 measured; 1.2e-12 before the pass was float32):
-        # within the pass's stated budget, 1e-5 of the amplitude (README, "Cost of a step").
+        # within the pass's stated budget, 1e-5 of the amplitude (docs/rod3d.md, "Cost of a step").
         # The reduced models agree to 1e-12
         np.testing.assert_allclose(batch.amplitude[i], one.amplitude, rtol=1e-5 if kind == "rod3d" else 1e-12,
                                    atol=1e-300)

@@ -208,7 +208,7 @@ def test_critical_velocity_converges_in_n_and_dt():
     assert d2 < 0.6 * d1  # converging in n
     assert abs(table[(64, 0.2)] - table[(64, 0.1)]) < 2e-3 * table[(64, 0.1)]  # dt converged
     theory = float(ROD.R * th.velocity_intercept(th.stiffness(ROD, 6, th.frictionless_load(ROD, 6) + 5.0), th.friction_amplitude(ROD)))
-    assert 0.85 < table[(128, 0.4)] / theory < 1.0  # field below the single-mode theory (see README)
+    assert 0.85 < table[(128, 0.4)] / theory < 1.0  # field below the single-mode theory (docs/models.md)
 
 
 def test_vmapped_field_runs_equal_single_runs_and_never_retrace():

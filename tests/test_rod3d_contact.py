@@ -136,7 +136,7 @@ def test_a_float32_pass_moves_a_run_far_less_than_its_time_step_does():
     float32 pass moves the final amplitude and positions by far less than halving the step does
     (measured: amplitude 1.5e-6 relative against 1.4e-3, positions 1.2e-10 m against 1.1e-7 m;
     at 500 segments, where the scheme's own error is smallest, 2e-6 against 1.5e-7:
-    benchmarks/README.md)."""
+    docs/rod3d.md, "Cost of a step")."""
     from jaxrod import theory
     from jaxrod.experiments.rod3d import run
     from jaxrod.rod3d import sine_velocity, step_limit

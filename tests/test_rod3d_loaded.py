@@ -75,7 +75,7 @@ def test_critical_velocity_within_3_percent_of_the_field_models():
     lies within 3 % of the field model's (boundary search, default resolution): a mode-6 sine
     velocity 3 % below the field model's v₀* leaves the 3D rod straight within 0.4 s, 3 % above
     buckles it (θ > 0.5 rad). Measured by bisection to 1 %: 26.19 mm/s against the field model's
-    26.81 (−2.3 %; 120 segments: +0.7 %; README "Field model against the 3D rod")."""
+    26.81 (−2.3 %; 120 segments: +0.7 %; docs/rod3d.md "Against the field model")."""
     res, _ = jr.boundary.critical_velocity(ROD, 5.0, model="field", rtol=1e-4, sensitivities=())
     v_field = float(res.root)
     assert v_field == pytest.approx(26.81e-3, rel=0.01)

@@ -234,7 +234,7 @@ def test_rod3d_sweep_matches_single_runs_and_flags_bad_members():
         assert bool(sol.buckled) == bool(res.outputs["buckled"][i])
         # the sweep's compilation rounds the float32 friction pass differently from the single
         # run's (3.9e-10 measured; within 1e-12 before the pass was float32): within its budget,
-        # 1e-5 of the amplitude (README, "Cost of a step")
+        # 1e-5 of the amplitude (docs/rod3d.md, "Cost of a step")
         np.testing.assert_allclose(res.outputs["max_theta"][i], float(jnp.max(sol.amplitude)), rtol=1e-5)
         assert res.outputs["t_buckle"][i] == float(sol.t_buckle)
         assert res.outputs["steps"][i] == int(sol.n_steps)

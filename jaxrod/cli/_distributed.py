@@ -21,7 +21,7 @@ def _host_port(text: str) -> str:
 def _add_distributed_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
         "several processes (jax.distributed: each process runs its share of the members and writes it "
-        "to --out, which all of them must share; README: Many processes)")
+        "to --out, which all of them must share; docs/sweeps.md: Many processes)")
     g.add_argument("--distributed", action="store_true",
                    help="join a run whose settings come from the cluster's environment (SLURM, Open MPI, "
                         "Kubernetes; as jax.distributed.initialize() detects them); the options below override")

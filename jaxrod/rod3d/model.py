@@ -60,7 +60,7 @@ class Rod3D(AbstractModel):
     - `speed`: pushing speed [m/s] for displacement control (negative: pulled back, to unload).
     - `contact_stiffness`: Hertz constant k [N/m^2.5] per length; default: the rod sinks δ₀ = 1e-3·R
       under its weight, k = w/δ₀^{3/2}. The straight rod wrinkles into the wall once F²/(4EI) >
-      1.5w/δ₀ (≈ 50 N for the reference rod): stiffen the wall for larger loads (README).
+      1.5w/δ₀ (≈ 50 N for the reference rod): stiffen the wall for larger loads (docs/rod3d.md).
     - `contact_damping`: Hunt–Crossley ζ [s/m], ≥ 0 (default 0: energy is conserved at μ = 0).
     - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (for
       quasi-static tests; 0 by default).
