@@ -165,12 +165,10 @@ class RandomForce(AbstractPerturbation):
                 f"integrate its forcing phase; got {type(integrator).__name__}."
             )
         force, _ = self.fields(model)
-        extra = model.from_samples(force / (model.rod.rho * model.rod.R))
-        forced = _Forced(model, extra)
-        q = jnp.zeros_like(extra)
-        v = jnp.zeros_like(extra)
+        forced = model.under_lateral_force(force)
+        q, v = model.perturbed_state(jnp.zeros_like(force), jnp.zeros_like(force))
         a = forced.acceleration(q, 0.0)
-        h = jnp.asarray(integrator.dt, q.dtype)
+        h = jnp.asarray(integrator.dt, force.dtype)
         n = jnp.maximum(jnp.ceil(self.duration / h), 1.0)
         h = self.duration / n
 
@@ -180,7 +178,7 @@ class RandomForce(AbstractPerturbation):
             return q, v, a
 
         q, v, a = jax.lax.fori_loop(0, n.astype(jnp.int32), body, (q, v, a))
-        return q, jnp.zeros_like(v)
+        return q, jax.tree_util.tree_map(jnp.zeros_like, v)  # released from rest
 
 
 class UserState(AbstractPerturbation):
@@ -195,34 +193,6 @@ class UserState(AbstractPerturbation):
 
     def initial_state(self, model, integrator=None):
         return self.q0, self.v0
-
-
-class _Forced(AbstractModel):
-    """A model with a constant extra acceleration (the forcing phase of `RandomForce`)."""
-
-    inner: AbstractModel
-    extra: Float[Array, " n"]
-
-    def acceleration(self, q, t):
-        return self.inner.acceleration(q, t) + self.extra
-
-    def friction_bounds(self, t):
-        return self.inner.friction_bounds(t)
-
-    def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
-        return self.inner.friction_update(friction, v_trial, v_prev, h, t, q, a)
-
-    def friction_acceleration(self, friction, v, t):
-        return self.inner.friction_acceleration(friction, v, t)
-
-    def energy_terms(self, q, v, t):
-        return self.inner.energy_terms(q, v, t)
-
-    def kinetic_energy(self, v):
-        return self.inner.kinetic_energy(v)
-
-    def max_frequency(self):
-        return self.inner.max_frequency()
 
 
 def project_to_mode(

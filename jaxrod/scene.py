@@ -120,9 +120,6 @@ class Scene(eqx.Module):
             raise ValueError(f"mode = {self.mode!r} is invalid: expected an int >= 1.")
         if self.n is not None and not (isinstance(self.n, int) and self.n >= (1 if self.kind == "galerkin" else 4)):
             raise ValueError(f"n = {self.n!r} is invalid for the {self.kind} model.")
-        if self.kind == "rod3d" and isinstance(self.perturbation, RandomForce):
-            raise ValueError("perturbation = RandomForce is not available with the 3D rod: expected "
-                             "'sine', 'random-velocity' or 'random-shape'.")
         if self.dt is not None and not (isinstance(self.dt, (int, float)) and self.dt > 0):
             raise ValueError(f"dt = {self.dt!r} is invalid: expected a float > 0 [s].")
 

@@ -60,8 +60,6 @@ def _check_simulate(args) -> None:
     if args.n_save < 2:
         _fail(f"argument --n-save: {args.n_save!r} is invalid: expected >= 2 saved times.")
     if args.model == "rod3d":
-        if args.perturbation != "sine":
-            _fail(f"argument --perturbation: {args.perturbation!r} is not available with --model rod3d; use 'sine'.")
         if args.speed is not None and args.speed < 0:
             _fail(f"argument --speed: {args.speed!r} is invalid: expected >= 0 m/s.")
         if args.speed is not None and args.control != "displacement":

@@ -72,7 +72,8 @@ def _cmd_simulate(args) -> int:
 
 
 def _simulate_rod3d(args, rod) -> int:
-    """`jaxrod simulate --model rod3d`: the 3D rod with a sine lateral velocity perturbation."""
+    """`jaxrod simulate --model rod3d`: the 3D rod with any of the paper's perturbations (sine
+    velocity, random velocity, random position, random shape) on its nodes."""
     import numpy as np
 
     from .. import theory
@@ -95,6 +96,14 @@ def _simulate_rod3d(args, rod) -> int:
         _fail(f"argument --dt: {args.dt!r} s is invalid: the explicit step limit of this rod is {limit:.4g} s; "
               f"use 0 < dt < {limit:.4g} s.")
     dt = 0.5 * limit if args.dt is None else args.dt
+    if args.perturbation != "sine":
+        import jax
+
+        from ..integrators import default_for
+        from ..scene import make_perturbation
+
+        pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
+        q0, v0 = pert.initial_state(model, default_for(model, dt))
     threshold = float(model.buckle_threshold)  # held ends: half the amplitude that relieves ΔF
     try:
         sol = run(model, q0, v0, args.t1, n_save, dt, threshold=threshold, stop_on_buckle=args.control != "displacement",
@@ -115,7 +124,7 @@ def _simulate_rod3d(args, rod) -> int:
     end_x = np.asarray(sol.observables["end_x"])
     i = int(np.argmax(R))
     out = {
-        "model": "rod3d", "control": args.control, "n_segments": n, "perturbation": "sine",
+        "model": "rod3d", "control": args.control, "n_segments": n, "perturbation": args.perturbation,
         "amplitude": args.amplitude, "mu": args.mu, "dF": args.dF if args.control != "displacement" else None,
         "F": F, "speed": args.speed if args.control == "displacement" else None,
         "dt": save_grid(args.t1, n_save, dt)[1], "t1": args.t1, "buckle_threshold": threshold,
@@ -130,8 +139,8 @@ def _simulate_rod3d(args, rod) -> int:
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"rod3d ({n} segments, {args.control} control), mu = {args.mu:g}, sine mode {args.mode} "
-              f"amplitude {args.amplitude:g} m/s: {'BUCKLED' if out['buckled'] else 'not buckled'}")
+        print(f"rod3d ({n} segments, {args.control} control), mu = {args.mu:g}, {args.perturbation} "
+              f"amplitude {args.amplitude:g}: {'BUCKLED' if out['buckled'] else 'not buckled'}")
         print(f"  max |theta| = {out['max_theta']:.4g} rad, peak reaction {out['peak_reaction']:.4g} N, "
               f"dominant mode {out['dominant_mode']}, energy balance error {out['energy_balance_error']:.2e} J, "
               f"result: {out['result']}")

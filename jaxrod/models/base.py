@@ -80,6 +80,12 @@ class AbstractModel(eqx.Module):
         R = self.rod.R
         return self.from_samples(offset / R), self.from_samples(velocity / R)
 
+    def under_lateral_force(self, force: Float[Array, " n"]) -> AbstractModel:
+        """This model with a constant lateral force per length `force` [N/m] added, given at
+        `sample_points` (the forcing phase of `jaxrod.RandomForce`). Default: the acceleration
+        force/(ρR) in the model's coordinates (`from_samples`)."""
+        return _Forced(self, self.from_samples(force / (self.rod.rho * self.rod.R)))
+
     # -- defaults that models with per-DOF friction and a constant load inherit ----------------
 
     @property
@@ -168,3 +174,31 @@ def friction_work(model, v_prev, v_trial, v_after):
     friction does no work on it. Kept per degree of freedom and summed only at the saves: a sum
     over the nodes at every step costs as much as the rest of the step's bookkeeping."""
     return jax.grad(model.kinetic_energy)(0.5 * (v_prev + v_after)) * (v_trial - v_after)
+
+
+class _Forced(AbstractModel):
+    """A model with a constant extra acceleration (`AbstractModel.under_lateral_force`)."""
+
+    inner: AbstractModel
+    extra: Float[Array, " n"]
+
+    def acceleration(self, q, t):
+        return self.inner.acceleration(q, t) + self.extra
+
+    def friction_bounds(self, t):
+        return self.inner.friction_bounds(t)
+
+    def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
+        return self.inner.friction_update(friction, v_trial, v_prev, h, t, q, a)
+
+    def friction_acceleration(self, friction, v, t):
+        return self.inner.friction_acceleration(friction, v, t)
+
+    def energy_terms(self, q, v, t):
+        return self.inner.energy_terms(q, v, t)
+
+    def kinetic_energy(self, v):
+        return self.inner.kinetic_energy(v)
+
+    def max_frequency(self):
+        return self.inner.max_frequency()

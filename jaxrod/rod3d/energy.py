@@ -75,10 +75,15 @@ def contact_energy(model, x):
 def external_energy(model, x):
     """Gravity (zero on the channel bottom, z = −R) and body-force potentials [J]."""
     grav = -jnp.sum(model.mass * (x[:, 2] + model.rod.R)) * model.g_vec[2]
-    body = -jnp.sum(model.voronoi * (x @ model.body_force))
+    body = -jnp.sum(model.voronoi[:, None] * x * _body_force(model))
     if model.control == "load":
         body = body + model.end_load * x[-1, 0]
     return grav + body
+
+
+def _body_force(model):
+    """The body force per length at each node (n+1, 3) [N/m]: `body_force` is one 3-vector or one per node."""
+    return jnp.broadcast_to(model.body_force, (model.n + 1, 3))
 
 
 def potential(model, x, Q):
@@ -141,7 +146,7 @@ def _conservative(model, X, Qr):
         delta, e_r = _penetration(model, X)
         el = model.voronoi * model.contact_stiffness * _pen_three_halves(delta)
         f = f - el[:, None] * c3.pack(e_r)
-    ext = model.mass[:, None] * model.g_vec[None, :] + model.voronoi[:, None] * model.body_force[None, :]
+    ext = model.mass[:, None] * model.g_vec[None, :] + model.voronoi[:, None] * _body_force(model)
     if model.control == "load":
         ext = ext.at[-1, 0].add(-model.end_load)
     return f + ext.astype(dtype), tau

@@ -76,11 +76,10 @@ class Rod3D(AbstractModel):
     - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
       models assume) (static).
-    - `friction_precision`: `"float32"` (default) or `"float64"` (earlier results to rounding), the
-      dtype of the friction pass (static; positions and forces stay float64, docs/physics.md §7):
-      a 500-segment step 15 % cheaper, amplitudes moved ~1e-6 relative; impulses resolved to ~1e-7
-      of the bound, so a `friction_tol` below ~1e-6 runs every pass to `friction_sweeps`.
-    - `body_force`: extra force per length [N/m], a 3-vector (default 0).
+    - `friction_precision`: `"float32"` (default) or `"float64"`, the dtype of the friction pass
+      (static; positions and forces stay float64, docs/physics.md §7): a 500-segment step 15 %
+      cheaper, amplitudes moved ~1e-6 relative; a `friction_tol` below ~1e-6 is not reached.
+    - `body_force`: extra force per length [N/m], a 3-vector or one per node (n + 1, 3) (default 0).
     - `gravity`: include gravity (static, default True).
     """
 
@@ -105,7 +104,7 @@ class Rod3D(AbstractModel):
     damping: Float[Array, ""]
     rotary_scale: Float[Array, ""]
     shear_coefficient: Float[Array, ""]
-    body_force: Float[Array, "3"]
+    body_force: Float[Array, "3"] | Float[Array, "n1 3"]
 
     def __init__(
         self,
@@ -285,8 +284,7 @@ class Rod3D(AbstractModel):
         return Rod3DVelocity(v, w, jnp.where(moved, stuck, v_prev.stuck), jnp.where(moved, force, v_trial.force),
                              jnp.where(moved, res, v_trial.residual), jnp.where(moved, sweeps, v_trial.sweeps))
 
-    def impulse_work(self, v_prev: Rod3DVelocity, v_trial: Rod3DVelocity, v_after: Rod3DVelocity,
-                     a: Rod3DForces, h):
+    def impulse_work(self, v_prev, v_trial, v_after, a: Rod3DForces, h):
         """`(lost, work_in)` over a half step `h` [J] (`jaxrod.rod3d.energy.impulse_work`)."""
         return energy.impulse_work(self, v_prev, v_trial, v_after, a, h)
 
@@ -307,20 +305,17 @@ class Rod3D(AbstractModel):
 
     @property
     def buckle_threshold(self) -> Float[Array, ""]:
-        """The buckling amplitude [rad] of this control: 0.5 under a dead load or displacement
-        control, min(0.5, ½A_held) with held ends (`jaxrod.rod3d.measures.buckle_threshold`)."""
+        """The buckling amplitude [rad] of this control (`jaxrod.rod3d.measures.buckle_threshold`)."""
         return measures.buckle_threshold(self)
 
     def axial_preload(self) -> Float[Array, ""]:
-        """The axial force of the straight rod the model starts from [N]: `end_load` under a
-        dead load, `preload` with held ends, 0 under displacement control."""
+        """The straight rod's axial force [N]: `end_load`, `preload` (held ends) or 0 (displacement)."""
         if self.control == "load":
             return self.end_load
         return self.preload if self.control == "force" else jnp.zeros_like(self.preload)
 
     def observables(self, q: Rod3DPosition, v: Rod3DVelocity, a: Rod3DForces, t=None) -> dict:
-        """θ per node, end reactions, end position, wall and axial forces, height, gap and the
-        friction residual at a save (`jaxrod.rod3d.measures.observables` lists them)."""
+        """What a save records (`jaxrod.rod3d.measures.observables` lists them)."""
         return measures.observables(self, q, v, a)
 
     # -- forces and friction ---------------------------------------------------------------
@@ -381,7 +376,12 @@ class Rod3D(AbstractModel):
 
     def from_samples(self, values):
         raise TypeError("Rod3D has no coordinates per sample point: a lateral field becomes a state through "
-                        "Rod3D.perturbed_state (RandomForce and UserState fields are not available with the 3D rod).")
+                        "Rod3D.perturbed_state (UserState fields are not available with the 3D rod).")
+
+    def under_lateral_force(self, force) -> Rod3D:
+        """This rod with the lateral (y) force per length `force` [N/m] at its nodes added to `body_force`."""
+        lateral = jnp.stack([0.0 * force, force, 0.0 * force], -1)
+        return eqx.tree_at(lambda m: m.body_force, self, energy._body_force(self) + lateral)
 
     def perturbed_state(self, offset, velocity) -> tuple[Rod3DPosition, Rod3DVelocity]:
         """The straight rod compressed to `axial_preload()` [N] (the dead load, or the preload of

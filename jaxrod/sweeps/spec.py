@@ -33,7 +33,7 @@ class SweepSpec:
       60; dt 0.5 of its explicit limit; `threshold` on max|θ| as for the other models).
     - `perturbation`: "sine", "random-velocity", "random-position" or "random-shape"
       (amplitude units as in [`jaxrod.scene.make_perturbation`][]; "random-position", a
-      timed force pulse, is not available with "rod3d").
+      timed force pulse of 1 ms, for "rod3d" too).
     - `mu`: friction coefficient (μ_s = μ_d) unless swept; `dF` [N], `amplitude` defaults.
     - `mode`: sine / single mode number; `n`: nodes, modes or 3D segments (`None`: the
       default for the largest load of the sweep); `dt` [s] (`None`: 0.4 of the step limit of
@@ -58,9 +58,6 @@ class SweepSpec:
     def __post_init__(self):
         if self.model not in MODELS:
             raise ValueError(f"SweepSpec.model = {self.model!r} is invalid: expected one of {MODELS}.")
-        if self.model == "rod3d" and self.perturbation == "random-position":
-            raise ValueError("SweepSpec.perturbation = 'random-position' is not available with model 'rod3d': "
-                             "expected 'sine', 'random-velocity' or 'random-shape'.")
         if self.model == "rod3d" and self.n is not None and not (isinstance(self.n, int) and self.n >= 4):
             raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model 'rod3d': expected an int >= 4 segments.")
         if self.perturbation not in PERTURBATIONS:
