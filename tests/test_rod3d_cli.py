@@ -42,3 +42,19 @@ def test_simulate_rod3d_with_held_ends_gives_the_reduced_models_verdict(capsys, 
     assert out["buckled"] is buckled
     if not buckled:
         assert out["max_theta"] < 0.2 * out["buckle_threshold"]
+
+
+@pytest.mark.slow  # 10 label runs of the 3D rod over a 2-s horizon (~100 s), then two plain runs
+def test_boundary_of_the_3d_rod_on_the_command_line_splits_plain_runs(capsys):
+    """`jaxrod boundary --model rod3d` (label bisection to 5 %): plain 3D runs of the same scene
+    (`Scene(kind="rod3d")`, 8 segments) 10 % below its v₀* stay straight and 10 % above buckle."""
+    import jaxrod as jr
+
+    code = main(["boundary", "--model", "rod3d", "--n", "8", "--dF", "5", "--rtol", "0.05", "--json", "--quiet"])
+    out = json.loads(capsys.readouterr().out)[0]
+    assert code == 0 and out["result"] == "converged"
+    rod = jr.RodChannel.reference(0.3)
+    for share, buckled in ((0.9, False), (1.1, True)):
+        sol = jr.scene.Scene(rod, 5.0, jr.SineVelocity(share * out["v0_star"], 6.0), "rod3d", n=8).run(
+            t1=2.0, save_state=False)
+        assert bool(sol.buckled) == buckled, share
