@@ -58,3 +58,27 @@ def test_boundary_of_the_3d_rod_on_the_command_line_splits_plain_runs(capsys):
         sol = jr.scene.Scene(rod, 5.0, jr.SineVelocity(share * out["v0_star"], 6.0), "rod3d", n=8).run(
             t1=2.0, save_state=False)
         assert bool(sol.buckled) == buckled, share
+
+
+@pytest.mark.slow  # two rounds of a vmapped 3D grid and a field search (~1 min)
+def test_crosscheck_critical_velocity_brackets_the_3d_boundary():
+    """`experiments.rod3d.crosscheck_critical_velocity` (reproduce e6's cross-check): its 3D
+    bracket is ordered, monotonic in v₀, and confirmed by plain runs at its two ends (the lower
+    stays straight, the upper buckles); the field model's v₀* it reports is the search's."""
+    import jaxrod as jr
+    from jaxrod.experiments.rod3d import crosscheck_critical_velocity
+    from jaxrod.rod3d import Rod3D, sine_velocity, step_limit
+    from jaxrod.experiments.rod3d import run
+
+    (r,) = crosscheck_critical_velocity([5.0], n=12, t1=0.4, grid=5, rounds=2, progress=False)
+    lo, hi = r["rod3d_bracket"]
+    assert r["monotonic"] and 0 < lo < hi and r["rod3d"] == pytest.approx((lo * hi) ** 0.5)
+    rod = jr.RodChannel.reference(0.3)
+    field, _ = jr.boundary.critical_velocity(rod, 5.0, model="field", rtol=1e-4, sensitivities=())
+    assert r["field"] == pytest.approx(float(field.root), rel=1e-12)
+    F = float(jr.theory.reference_load(rod)) + 5.0
+    model = Rod3D(rod, 12, control="load", end_load=F)
+    for v0, buckled in ((lo, False), (hi, True)):
+        q0, w0 = model.initial_state(F, lateral_velocity=sine_velocity(model, v0))
+        sol = run(model, q0, w0, 0.4, 11, 0.5 * step_limit(model, q0))
+        assert bool(sol.buckled) == buckled, v0
