@@ -11,7 +11,7 @@ PKG = pathlib.Path(__file__).parent.parent / "jaxrod"
 LAYERS = [
     ["_results", "_version", "_xla", "_cache", "_numerics", "_trig", "params", "friction", "loads", "modal", "solution", "batching", "search", "output",
      "distributed"],
-    ["theory"],
+    ["theory", "lockup"],
     ["models", "rod3d.so3", "rod3d.model", "rod3d"],
     ["integrators"],
     ["perturbations", "simulate"],
