@@ -41,7 +41,6 @@ CASES = [
     (["boundary", "--model", "mode3d"], "--model"),
     (["critical-load", "--perturbation", "noise"], "--perturbation"),
     (["boundary", "--method", "newton"], "--method"),
-    (["boundary", "--model", "rod3d", "--method", "departure"], "--method"),
     (["reproduce", "e9"], "which"),
     (["reproduce"], "which"),
     (["figure", "bogus"], "which"),
@@ -69,7 +68,6 @@ CASES = [
     (["simulate", "--model", "auto", "--control", "load"], "--control"),
     (["simulate", "--model", "rod3d", "--speed", "2e-3"], "--speed"),
     (["simulate", "--model", "rod3d", "--control", "displacement", "--speed", "-1"], "--speed"),
-    (["simulate", "--model", "rod3d", "--perturbation", "random-shape"], "--perturbation"),
 ]
 
 

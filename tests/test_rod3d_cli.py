@@ -82,3 +82,17 @@ def test_crosscheck_critical_velocity_brackets_the_3d_boundary():
         q0, w0 = model.initial_state(F, lateral_velocity=sine_velocity(model, v0))
         sol = run(model, q0, w0, 0.4, 11, 0.5 * step_limit(model, q0))
         assert bool(sol.buckled) == buckled, v0
+
+
+@pytest.mark.slow  # a forward-mode 3D search and a bisection, 12 segments (~2 min)
+def test_departure_search_of_the_3d_rod_lands_in_the_bisection_bracket():
+    """The departure rate on the 3D rod's node positions (opt-in, `method="departure"`) finds
+    a root inside the label bracket of bisection of the same runs."""
+    import jaxrod as jr
+
+    rod = jr.RodChannel.reference(0.3)
+    kw = dict(model="rod3d", n=12, rtol=1e-2, sensitivities=())
+    dep, _ = jr.boundary.critical_velocity(rod, 5.0, method="departure", **kw)
+    bis, _ = jr.boundary.critical_velocity(rod, 5.0, method="bisection", **kw)
+    assert int(dep.result) == 0 and int(bis.result) == 0
+    assert float(bis.lo) <= float(dep.root) <= float(bis.hi)

@@ -78,8 +78,8 @@ def departure_rate(scene_of, x, t1: float = 2.0):
     u/(v₀ − v₀*) stays within 86–120 s⁻¹ from (v₀ − v₀*)/v₀* = 1e-7 to 0.1, where the
     amplitude at a fixed horizon jumps from 0.05 to 1e30 rad at the root.
 
-    **Arguments:** `scene_of` (x → [`jaxrod.scene.Scene`][] of a reduced model, forward
-    differentiable in x), `x`, `t1` (horizon [s]: a run that neither sticks nor buckles by then
+    **Arguments:** `scene_of` (x → [`jaxrod.scene.Scene`][], forward differentiable in x; for
+    the 3D rod u projects the node velocities on the nodes' tangent, `Rod3D.translation`), `x`, `t1` (horizon [s]: a run that neither sticks nor buckles by then
     counts as stable).
 
     **Returns:** `(buckled, u)`, `u` in units of x per second (`nan` when not buckled).
@@ -88,6 +88,7 @@ def departure_rate(scene_of, x, t1: float = 2.0):
     (_, v), (dq, _), buckled = jax.jvp(
         lambda x: crossing_state(scene_of(x), t1), (x,), (jnp.ones_like(x),), has_aux=True
     )
+    dq, v = scene_of(x).model().translation(dq, v)  # the 3D rod: node positions and velocities
     return buckled, jnp.where(buckled, _along(v, dq), jnp.nan)
 
 

@@ -40,8 +40,6 @@ def check_args(args) -> None:
         if args.max_dF <= MIN_DF_BRACKET:
             _fail(f"argument --max-dF: {args.max_dF!r} is invalid: the bracket's top must be > its "
                   f"bottom, {MIN_DF_BRACKET:g} N.")
-    if cmd in ("boundary", "critical-load") and args.model == "rod3d" and args.method == "departure":
-        _fail("argument --method: 'departure' is invalid with --model rod3d: use 'bisection' (the default).")
     if getattr(args, "n", None) is not None and args.model in MIN_N:
         least, unit = MIN_N[args.model]
         if args.n < least:

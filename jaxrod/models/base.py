@@ -80,6 +80,12 @@ class AbstractModel(eqx.Module):
         R = self.rod.R
         return self.from_samples(offset / R), self.from_samples(velocity / R)
 
+    def translation(self, q, v):
+        """The coordinates of `q` and the velocities of `v` that are their time derivatives, as
+        two pytrees of one structure (the boundary search's departure rate projects one on the
+        other). Default: `(q, v)` themselves."""
+        return q, v
+
     def under_lateral_force(self, force: Float[Array, " n"]) -> AbstractModel:
         """This model with a constant lateral force per length `force` [N/m] added, given at
         `sample_points` (the forcing phase of `jaxrod.RandomForce`). Default: the acceleration

@@ -347,9 +347,8 @@ class Rod3D(AbstractModel):
     # -- states ------------------------------------------------------------------------------
     def static_sag(self):
         """Penetration of a rod resting on the bottom under its own weight [m]."""
-        if not (self.channel and self.gravity):
-            return 0.0 * self.rod.R
-        return (self.rod.rho * self.rod.g / self.contact_stiffness) ** (2.0 / 3.0)
+        sag = (self.rod.rho * self.rod.g / self.contact_stiffness) ** (2.0 / 3.0)
+        return sag if self.channel and self.gravity else 0.0 * sag
 
     def initial_state(self, F: ArrayLike | None = None, lateral_velocity=None,
                       lateral_offset=None) -> tuple[Rod3DPosition, Rod3DVelocity]:
@@ -378,6 +377,9 @@ class Rod3D(AbstractModel):
         raise TypeError("Rod3D has no coordinates per sample point: a lateral field becomes a state through "
                         "Rod3D.perturbed_state (UserState fields are not available with the 3D rod).")
 
+    def translation(self, q: Rod3DPosition, v: Rod3DVelocity):  # spins are not rates of the directors
+        return q.x, v.v
+
     def under_lateral_force(self, force) -> Rod3D:
         """This rod with the lateral (y) force per length `force` [N/m] at its nodes added to `body_force`."""
         lateral = jnp.stack([0.0 * force, force, 0.0 * force], -1)
@@ -389,12 +391,10 @@ class Rod3D(AbstractModel):
         [m/s] at its nodes (see `initial_state`)."""
         return self.initial_state(None, lateral_velocity=velocity, lateral_offset=offset)
 
-    # -- observables -------------------------------------------------------------------------
     def theta(self, x) -> Float[Array, " n1"]:
         """Angle of each node from the channel bottom [rad] (as θ in the field model)."""
         return wall_angle(x)
 
     def axial_force(self, x, Q) -> Float[Array, " n"]:
         """Compressive axial force of each segment, −EA σ₃ [N]."""
-        sigma, _ = self.strains(x, Q)
-        return -self.rod.EA * sigma[:, 2]
+        return -self.rod.EA * self.strains(x, Q)[0][:, 2]
