@@ -92,8 +92,8 @@ def test_a_failed_search_names_no_root():
 
 def test_the_3d_rod_gets_the_same_modes_at_its_nodes():
     """The 3D rod's lateral node velocities carry the same modes 1-12 as the field model's
-    nodal field (the 3D rod's n − 1 interior nodes resolve modes up to n − 1); a RandomForce
-    scene is refused with a one-line error."""
+    nodal field (the 3D rod's n − 1 interior nodes resolve modes up to n − 1); its random
+    position pulse: tests/test_rod3d_random_position.py."""
     p = RandomVelocity(0.015, KEY)
     c = _modes(p.fields(jr.FieldModel.from_rod(ROD, 384, dF=5.0))[1], 12)
     sc = jr.scene.Scene(ROD, 5.0, p, "rod3d", n=40, dt=1e-6)  # dt given: no step-limit compilation
@@ -101,8 +101,6 @@ def test_the_3d_rod_gets_the_same_modes_at_its_nodes():
     lateral = np.asarray(v.v[1:-1, 1])  # on the straight rod at the bottom, along y
     np.testing.assert_allclose(_modes(jnp.asarray(lateral), 12), c, rtol=0, atol=1e-12 * 0.015)
     assert np.all(np.asarray(v.v)[[0, -1]] == 0.0)
-    with pytest.raises(ValueError, match="RandomForce is not available with the 3D rod"):
-        jr.scene.Scene(ROD, 5.0, jr.perturbations.RandomForce(2.0, KEY), "rod3d", n=40)
 
 
 # -- perturbations on values worked out by hand (eager, no compilation) ------------------------
@@ -201,3 +199,86 @@ def test_random_force_over_a_duration_that_is_not_a_whole_number_of_steps():
         assert err < 2e-3
     q, v = RandomForce(2.0, KEY, duration=0.0).initial_state(model, jr.ProjectedVerlet(1e-4))
     np.testing.assert_array_equal(q, np.zeros(16))
+
+
+def test_the_forcing_phase_model_is_the_rod_plus_a_constant_acceleration():
+    """`RandomForce`'s forcing phase runs the model with a constant extra acceleration and
+    everything else of the rod unchanged: friction bounds μ·g/R (N = ρg), the kinetic energy
+    ½ρR²Δ Σθ̇², the energies, the step limit; the module's `initial_state` is the
+    perturbation's."""
+    from jaxrod.models.base import _Forced
+    from jaxrod.perturbations import initial_state
+
+    F0 = float(jr.theory.reference_load(ROD))
+    model = jr.FieldModel.from_rod(ROD, 5, F=jr.loads.RampLoad(F0, F0 + 10.0, 0.0, 1.0))  # the load varies in t
+    extra = jnp.asarray([1.0, -2.0, 0.5, 0.0, 3.0])
+    forced = _Forced(model, extra)
+    q, v = jnp.asarray([0.01, 0.02, -0.01, 0.0, 0.03]), jnp.asarray([0.5, -0.25, 0.0, 1.0, -2.0])
+    np.testing.assert_allclose(forced.acceleration(q, 0.1), np.asarray(model.acceleration(q, 0.1)) + np.asarray(extra),
+                               rtol=1e-14)
+    g_R = float(ROD.g) / float(ROD.R)
+    f_s, f_d = forced.friction_bounds(0.0)
+    assert float(f_s) == pytest.approx(float(ROD.mu_s) * g_R, rel=1e-14)
+    assert float(f_d) == pytest.approx(float(ROD.mu_d) * g_R, rel=1e-14)
+    np.testing.assert_allclose(forced.friction_acceleration(jr.Coulomb(), v, 0.0),
+                               float(ROD.mu_d) * g_R * np.sign(np.asarray(v)), rtol=1e-14)
+    # one step of h = 1e-3 from rest: held while |v_trial| ≤ h·μ_s·g/R (≈ 0.27 rad/s here)
+    h = 1e-3
+    out = forced.friction_update(jr.Coulomb(), v, jnp.zeros(5), h, 0.0)
+    want = np.where(np.abs(np.asarray(v)) <= h * float(f_s), 0.0, np.asarray(v) - h * float(f_d) * np.sign(np.asarray(v)))
+    np.testing.assert_allclose(out, want, rtol=1e-14)
+    spacing = float(ROD.L) / 6
+    assert float(forced.kinetic_energy(v)) == pytest.approx(
+        0.5 * float(ROD.rho) * float(ROD.R) ** 2 * spacing * float(np.sum(np.asarray(v) ** 2)), rel=1e-13)
+    assert float(forced.max_frequency()) == float(model.max_frequency())
+    e_f, e_m = forced.energy_terms(q, v, 0.1), model.energy_terms(q, v, 0.1)
+    assert set(e_f) == set(e_m) and all(float(e_f[k]) == float(e_m[k]) for k in e_m)
+    pert = RandomForce(2.0, KEY, duration=2e-5)
+    for a, b in zip(initial_state(pert, model, jr.ProjectedVerlet(1e-5)), pert.initial_state(model, jr.ProjectedVerlet(1e-5))):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_random_force_on_a_ramped_load_sees_the_load_at_each_step():
+    """Forcing the frictionless rod while its load ramps by 400 N over the 1.3 ms pulse: the
+    shape equals an independent high-order integration (SciPy's DOP853 at rtol 1e-11) within
+    3e-4 of max|q| (3.2e-5 measured at a 1e-5 s step); under the initial load held constant it
+    would be 22 % off. A non-fixed-step integrator is refused with a one-line error."""
+    from scipy.integrate import solve_ivp
+
+    rod = ROD.with_friction(0.0, 0.0)
+    F0 = float(jr.theory.reference_load(rod))
+    duration = 1.3e-3
+    model = jr.FieldModel.from_rod(rod, 16, F=jr.loads.RampLoad(F0, F0 + 400.0, 0.0, duration))
+    pert = RandomForce(2.0, KEY, duration=duration)
+    q, v = pert.initial_state(model, jr.ProjectedVerlet(1e-5))
+    ext = np.asarray(pert.fields(model)[0]) / float(rod.rho * rod.R)
+    acc = jax.jit(lambda x, t: model.acceleration(x, t))
+    sol = solve_ivp(lambda t, y: np.r_[y[16:], np.asarray(acc(jnp.asarray(y[:16]), t)) + ext], (0.0, duration),
+                    np.zeros(32), method="DOP853", rtol=1e-11, atol=1e-16)
+    ref = sol.y[:16, -1]
+    assert np.max(np.abs(np.asarray(q) - ref)) < 3e-4 * np.max(np.abs(ref))
+    assert np.all(np.asarray(v) == 0)
+    with pytest.raises(TypeError, match=r"^RandomForce needs the run's fixed-step integrator \(e\.g\. ProjectedVerlet\) "
+                                        r"to integrate its forcing phase; got NoneType\.$"):
+        pert.initial_state(model)
+
+
+def test_noise_fields_keep_the_points_dtype_and_the_3d_rod_gets_only_its_resolved_modes():
+    """Single-precision sample points give a single-precision field (both noise paths); the 3D
+    rod's n + 1 nodes (ends included) carry the modes 1..n − 1 of the scene's field only (mode n
+    vanishes at the nodes and mode n + 1 would alias onto mode 1)."""
+    s32 = jnp.asarray([0.2, 1.1, 1.7, 2.9], jnp.float32)
+    for grid in (None, 8):
+        assert scene_noise(KEY, 0.015, s32, 3.0, grid=grid).dtype == jnp.float32, grid
+    assert scene_noise_modes(KEY, 0.015, 8, dtype=jnp.float32).dtype == jnp.float32
+    from jaxrod.rod3d import Rod3D
+
+    n = 8
+    m = Rod3D(ROD, n)
+    r = np.asarray(jax.random.uniform(KEY, (499,), jnp.float64, -1.0, 1.0)) * 0.015
+    c = _coefficients(r, 500, n - 1)
+    j = np.arange(n + 1)
+    want = np.array([np.sum(c * np.sin(np.pi * np.arange(1, n) * jj / n)) for jj in j])
+    y, v = RandomShape(0.015, KEY).fields(m)
+    np.testing.assert_allclose(y, want, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(v, np.zeros(n + 1))
