@@ -182,12 +182,17 @@ def test_plot_shows_the_members_theory_fit_and_searched_curve(tmp_path):
                                        "horizon 2 s)")
 
 
-def test_a_small_single_mode_map_end_to_end(tmp_path):
+def test_a_small_single_mode_map_end_to_end(tmp_path, monkeypatch):
     """2 × 2 map of the single-mode model (cheap to compile): labels against the single-mode
-    theory's stable zone, and the files it writes."""
+    theory's stable zone, and the files it writes (the figure is handed to `plot_maps`, whose
+    drawing the test above checks)."""
     rod = jr.RodChannel.reference(0.3)
     dF, v0 = [1.0, 16.0], [2e-3, 0.1]
+    drawn = []
+    monkeypatch.setattr(sm, "plot_maps", lambda results, summary, path: drawn.append((results, summary, path)))
     s = sm.stability_map(mus=(0.3,), dF=dF, v0=v0, model="mode", out=str(tmp_path), progress=False, t1=0.5)
+    assert len(drawn) == 1 and drawn[0][1] is s and drawn[0][2] == str(tmp_path / "map.png")
+    assert list(drawn[0][0]) == [0.3] and drawn[0][0][0.3].grid("buckled").tolist() == [[False, True], [False, True]]
     # P6 at ΔF = 1, 16: v_cr = 64 and 16 mm/s, so 2 mm/s stays and 100 mm/s buckles at both loads
     assert list(_theory_by_hand(rod, dF) * 1e3) == pytest.approx([63.67, 15.92], rel=1e-3)
     m = s["maps"]["0.3"]
@@ -201,4 +206,4 @@ def test_a_small_single_mode_map_end_to_end(tmp_path):
         rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     assert [(float(r["dF"]), float(r["v0"]), r["buckled"]) for r in rows] == [
         (1.0, 2e-3, "0"), (1.0, 0.1, "1"), (16.0, 2e-3, "0"), (16.0, 0.1, "1")]
-    assert (tmp_path / "map.png").exists() and (tmp_path / "sweep_mu0.3" / "sweep.json").exists()
+    assert (tmp_path / "sweep_mu0.3" / "sweep.json").exists()
