@@ -207,3 +207,40 @@ def test_a_small_single_mode_map_end_to_end(tmp_path, monkeypatch):
     assert [(float(r["dF"]), float(r["v0"]), r["buckled"]) for r in rows] == [
         (1.0, 2e-3, "0"), (1.0, 0.1, "1"), (16.0, 2e-3, "0"), (16.0, 0.1, "1")]
     assert (tmp_path / "sweep_mu0.3" / "sweep.json").exists()
+
+
+def test_searched_boundary_fits_the_roots_that_converged(monkeypatch):
+    """`_searched` hands the map's resolution to `boundary_curve` (here a stand-in returning
+    chosen roots) and reports each load's root (None where the search failed), the runs used,
+    and the exponent fitted to the converged roots only."""
+    import jaxrod.boundary as bd
+
+    calls = []
+
+    def fake(rod, dFs, **kw):
+        calls.append((float(rod.mu_d), np.asarray(dFs), kw))
+        r = bd.RootResult(root=np.array([8e-3, 5.0, 2e-3, 1e-3]), lo=np.zeros(4), hi=np.zeros(4), value=np.zeros(4),
+                          derivative=np.zeros(4), evaluations=np.array([5, 9, 6, 7]), result=np.array([0, 2, 0, 0]))
+        return r, {}
+
+    monkeypatch.setattr(bd, "boundary_curve", fake)
+    dF = np.array([1.0, 2.0, 4.0, 16.0])
+    res = SweepResult({"index": np.arange(4)}, {"result": np.zeros(4, int)}, (4,), ("dF",), {"n": 48, "dt": 2e-5})
+    out = sm._searched(res, dF, 0.25, "galerkin", 5, 1.5, 1e-4, False)
+    assert len(calls) == 1
+    mu, dFs, kw = calls[0]
+    assert mu == 0.25 and list(dFs) == list(dF)
+    assert kw == dict(model="galerkin", n=48, dt=2e-5, mode=5, bracket=(1e-5, 2.0), rtol=1e-4, t1=1.5,
+                      sensitivities=(), progress=False)
+    assert out["curve_rtol"] == 1e-4 and out["curve_v0"] == [8e-3, None, 2e-3, 1e-3]
+    assert out["curve_evaluations"] == [5, 9, 6, 7]
+    # the converged roots (1, 8e-3), (4, 2e-3), (16, 1e-3): slope of ln v on ln ΔF by hand
+    lx, ly = np.log([1.0, 4.0, 16.0]), np.log([8e-3, 2e-3, 1e-3])
+    slope = np.sum((lx - lx.mean()) * (ly - ly.mean())) / np.sum((lx - lx.mean()) ** 2)
+    assert out["curve_exponent"] == pytest.approx(slope, rel=1e-12) and out["curve_exponent_stderr"] > 0
+    # fewer than two converged roots: no exponent
+    monkeypatch.setattr(bd, "boundary_curve", lambda rod, dFs, **kw: (bd.RootResult(
+        root=np.array([8e-3, 5.0]), lo=np.zeros(2), hi=np.zeros(2), value=np.zeros(2), derivative=np.zeros(2),
+        evaluations=np.array([5, 9]), result=np.array([0, 1])), {}))
+    out = sm._searched(res, dF[:2], 0.25, "field", 6, 2.0, 1e-3, False)
+    assert out["curve_v0"] == [8e-3, None] and math.isnan(out["curve_exponent"]) and math.isnan(out["curve_exponent_stderr"])
