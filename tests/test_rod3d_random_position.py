@@ -55,10 +55,4 @@ def test_a_pulse_below_the_static_bound_leaves_the_3d_rod_where_it_was():
     model, p, q, _ = _forced(0.02)  # below μ_s w = 0.034 N/m at every node
     assert not _hand(p, model)[1].any()
     assert float(jnp.max(jnp.abs(q.x[:, 1]))) < 1e-12
-
-
-def test_the_3d_rod_takes_every_perturbation_of_the_paper():
-    SweepSpec(model="rod3d", perturbation="random-position", n=12)  # accepted (was refused)
-    s = jr.scene.Scene(ROD, 5.0, RandomForce(2.0, KEY), "rod3d", n=12, dt=1e-6)
-    q, v = s.initial_state()
-    assert float(jnp.max(jnp.abs(q.x[:, 1]))) > 1e-7 and float(jnp.max(jnp.abs(v.v))) == 0.0
+    SweepSpec(model="rod3d", perturbation="random-position", n=12)  # sweeps take it too (`Scene`: the CLI's slow test)

@@ -42,7 +42,9 @@ def _check(n, name):
     return model, q0, om
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
+# two cases by default (one power-iteration compilation each); all four at 30–500 segments below
+@pytest.mark.parametrize("name", ["channel, compressed", pytest.param("free rod, tension", marks=pytest.mark.slow),
+                                  "stiff wall, clamped", pytest.param("channel, offset 2 mm", marks=pytest.mark.slow)])
 def test_the_closed_form_bounds_the_measured_frequency_at_12_segments(name):
     model, q0, om = _check(12, name)
     # traced (under jit) it gives the same number, and the default state is the straight one
