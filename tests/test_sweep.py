@@ -240,8 +240,6 @@ def test_rod3d_sweep_matches_single_runs_and_flags_bad_members():
         assert res.outputs["steps"][i] == int(sol.n_steps)
     assert not res.outputs["buckled"][0] and res.outputs["buckled"][2]
     assert res.outputs["dominant_mode"][2] == 6
-    with pytest.raises(ValueError, match="random-position"):
-        SweepSpec(model="rod3d", perturbation="random-position")
     with pytest.raises(ValueError, match="SweepSpec.dt"):
         sweep(SweepSpec(model="rod3d", n=12, dt=1.0), {"dF": [1.0]}, progress=False)
 
