@@ -259,8 +259,8 @@ def test_random_force_on_a_ramped_load_sees_the_load_at_each_step():
     assert np.max(np.abs(np.asarray(q) - ref)) < 3e-4 * np.max(np.abs(ref))
     assert np.all(np.asarray(v) == 0)
     with pytest.raises(TypeError, match=r"^RandomForce needs the run's fixed-step integrator \(e\.g\. ProjectedVerlet\) "
-                                        r"to integrate its forcing phase; got NoneType\.$"):
-        pert.initial_state(model)
+                                        r"to integrate its forcing phase; got Exact\.$"):
+        pert.initial_state(model, jr.Exact())
 
 
 def test_noise_fields_keep_the_points_dtype_and_the_3d_rod_gets_only_its_resolved_modes():

@@ -58,7 +58,8 @@ GROUPS = {
                "tests/test_rod3d_loaded.py"]),
     "boundary": (["jaxrod/boundary/*"], ["tests/test_boundary.py"]),
     # the map's numbers on hand-built results and one 2 × 2 single-mode map; test_cli.py's
-    # field-model map (sweeps, a boundary search and single scenes) takes a minute per mutant
+    # field-model map (sweeps, a boundary search and single scenes) takes a minute per mutant.
+    # 802 mutants (most in plot_maps' labels, markers and limits): about 70-100 min with one job
     "stability_map": (["jaxrod/stability_map.py"], ["tests/test_mutants_stability_map.py"]),
     "sweeps_result": (["jaxrod/sweeps/result.py"], ["tests/test_sweep.py"]),
 }
