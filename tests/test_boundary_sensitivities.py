@@ -14,6 +14,7 @@ ROD = jr.RodChannel.reference(0.3)
 N = 32
 
 
+@pytest.mark.slow  # 12 s; the same IFT machinery against finite differences in μ runs by default (test_boundary.py)
 def test_critical_velocity_sensitivity_to_the_load():
     dF = 2.0
     dt = jr.scene.Scene(ROD, dF, kind="field", n=N).step()
