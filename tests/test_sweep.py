@@ -484,6 +484,7 @@ def test_concatenate_member_ranges_of_a_hand_grid():
         joined = SweepResult.concatenate(parts)
         assert joined.shape == (2, 2, 3) and joined.names == ("dF", "amplitude", "realization")
         assert joined.meta["seed"] == 3 and joined.meta["spec"] == {"model": "field", "n": 16}
+        assert joined.meta["shape"] == [2, 2, 3] and joined.meta["members"] == [0, 12]  # its own, not part 0's
         assert set(joined.inputs) == set(whole.inputs) and set(joined.outputs) == set(whole.outputs)
         np.testing.assert_array_equal(joined.inputs["index"], np.arange(12))
         np.testing.assert_array_equal(joined.inputs["dF"], np.repeat([2.0, 20.0], 6))

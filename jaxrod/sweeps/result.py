@@ -136,7 +136,10 @@ class SweepResult:
         inputs = {k: np.concatenate([p.inputs[k] for p in parts])[order] for k in parts[0].inputs}
         outputs = {k: np.concatenate([p.outputs[k] for p in parts])[order] for k in parts[0].outputs}
         shape = parts[0].meta.get("full_shape", (len(idx),))
-        return SweepResult(inputs, outputs, tuple(shape), parts[0].names, parts[0].meta)
+        # the joined result's own extent, not the first part's
+        meta = {**parts[0].meta, **({"shape": list(shape)} if "shape" in parts[0].meta else {}),
+                **({"members": [int(idx.min()), int(idx.max()) + 1]} if "members" in parts[0].meta else {})}
+        return SweepResult(inputs, outputs, tuple(shape), parts[0].names, meta)
 
 
 _FILL = {
@@ -157,8 +160,9 @@ def wilson_interval(k, n, z: float = 1.96):
     """Wilson score interval (lo, hi) for a binomial proportion k/n (elementwise)."""
     k, n = np.asarray(k, float), np.asarray(n, float)
     p = np.where(n > 0, k / np.maximum(n, 1), np.nan)
-    den = 1 + z**2 / n
-    centre = (p + z**2 / (2 * n)) / den
-    half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / den
+    with np.errstate(divide="ignore", invalid="ignore"):  # n = 0 (every member failed): NaN, silently
+        den = 1 + z**2 / n
+        centre = (p + z**2 / (2 * n)) / den
+        half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / den
     return centre - half, centre + half
 
