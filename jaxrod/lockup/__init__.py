@@ -5,14 +5,15 @@ force per length of a straight, sinusoidal and helical section, the force that r
 end, its largest value against the length, and the lock-up length.
 """
 
+from . import chain as chain
 from . import closed_forms as closed_forms
-from .closed_forms import (
+from .chain import (
     far_force as far_force,
 )
-from .closed_forms import (
+from .chain import (
     far_force_max as far_force_max,
 )
-from .closed_forms import (
+from .chain import (
     force_profile as force_profile,
 )
 from .closed_forms import (
@@ -39,10 +40,10 @@ from .closed_forms import (
 from .closed_forms import (
     length_unit as length_unit,
 )
-from .closed_forms import (
+from .chain import (
     lockup_length as lockup_length,
 )
-from .closed_forms import (
+from .chain import (
     section_extents as section_extents,
 )
 from .closed_forms import (
@@ -60,11 +61,12 @@ from .closed_forms import (
 from .closed_forms import (
     transfer_length as transfer_length,
 )
-from .closed_forms import (
+from .chain import (
     wall_force as wall_force,
 )
 
 __all__ = [
+    "chain",
     "closed_forms",
     "far_force",
     "far_force_max",
