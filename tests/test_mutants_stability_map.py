@@ -244,3 +244,52 @@ def test_searched_boundary_fits_the_roots_that_converged(monkeypatch):
         evaluations=np.array([5, 9]), result=np.array([0, 1])), {}))
     out = sm._searched(res, dF[:2], 0.25, "field", 6, 2.0, 1e-3, False)
     assert out["curve_v0"] == [8e-3, None] and math.isnan(out["curve_exponent"]) and math.isnan(out["curve_exponent_stderr"])
+
+
+def test_the_figure_reads_the_same_at_its_size_markers_and_other_modes(tmp_path):
+    """What a reader of `map.png` compares: the panel size (6.2 in per μ by 5 in), hollow
+    circles for stable members against crosses for buckled ones and black squares for failed
+    runs (all of area 22 pt²), no "failed run" entry when every run succeeded, the theory
+    curve of the map's own mode, and the searched curve drawn 2 pt wide over the 1.5-pt fit."""
+    dF, res = _map(0.3)
+    s = sm._summarise(res, dF, V0, 0.3)
+    s["curve_v0"], s["curve_rtol"], s["curve_exponent"] = [7e-3, None, 1e-3], 1e-3, -1.5
+    summary = {"model": "field", "mode": 7, "t1": 2.0, "n": 32, "dt": 1e-5, "dF": dF.tolist(), "v0": V0.tolist(),
+               "maps": {"0.3": s}}
+    fig = sm.plot_maps({0.3: res}, summary)
+    assert tuple(fig.get_size_inches()) == pytest.approx((6.2, 5.0))
+    ax = fig.axes[0]
+    stable, buckled, failed = ax.collections
+    assert len(stable.get_facecolor()) == 0 or stable.get_facecolor()[0][3] == 0  # hollow
+    assert tuple(failed.get_facecolor()[0][:3]) == (0.0, 0.0, 0.0)
+    for c in (stable, buckled, failed):
+        assert list(c.get_sizes()) == [22]
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    x, y = lines["single-mode theory P6 (slope −1/2)"].get_data()
+    np.testing.assert_allclose(y, 1e3 * sm.theory_boundary(jr.RodChannel.reference(0.3), x, 7), rtol=1e-12)
+    assert not np.allclose(y, 1e3 * _theory_by_hand(jr.RodChannel.reference(0.3), x))  # mode 7, not 6
+    assert lines["searched boundary (rtol 0.001): v0* ∝ ΔF^(-1.500)"].get_linewidth() == 2
+    # every run succeeded: no failed-run markers and no legend entry for them
+    ok = _all_succeeded(res)
+    fig = sm.plot_maps({0.3: ok}, {**summary, "maps": {"0.3": sm._summarise(ok, dF, V0, 0.3)}})
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "failed run" not in labels and len(fig.axes[0].collections) == 2
+
+
+def _all_succeeded(res):
+    """The hand map with its failed member counted as a successful buckled run."""
+    out = dict(res.outputs)
+    out["result"] = np.zeros_like(out["result"])
+    return SweepResult(dict(res.inputs), out, res.shape, res.names, res.meta)
+
+
+def test_two_converged_roots_are_enough_for_the_searched_exponent(monkeypatch):
+    """Two converged roots of the searched boundary fix its exponent: the slope through them."""
+    import jaxrod.boundary as bd
+
+    monkeypatch.setattr(bd, "boundary_curve", lambda rod, dFs, **kw: (bd.RootResult(
+        root=np.array([8e-3, 2e-3, 1.0]), lo=np.zeros(3), hi=np.zeros(3), value=np.zeros(3), derivative=np.zeros(3),
+        evaluations=np.array([5, 6, 9]), result=np.array([0, 0, 1])), {}))
+    res = SweepResult({"index": np.arange(3)}, {"result": np.zeros(3, int)}, (3,), ("dF",), {"n": 48, "dt": 2e-5})
+    out = sm._searched(res, np.array([1.0, 4.0, 16.0]), 0.3, "field", 6, 2.0, 1e-3, False)
+    assert out["curve_exponent"] == pytest.approx(math.log(2e-3 / 8e-3) / math.log(4.0), rel=1e-12)

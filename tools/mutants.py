@@ -12,6 +12,11 @@ killed / (made − equivalent), and the diff of every survivor.
 
     python tools/mutants.py                  # every group
     python tools/mutants.py theory friction  # some groups
+    python tools/mutants.py rod3d --sample 60  # a random sample of a group's mutants
+
+A group whose every mutant would take hours on this CPU (each mutant compiles JAX functions for
+its tests) is run on a uniform random sample (`--sample K`, seed 0): the report then gives the
+sample's score with its 95 % Wilson interval, and the mutants left out as "not sampled".
 """
 
 from __future__ import annotations
@@ -19,7 +24,9 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import math
 import os
+import random
 import re
 import shutil
 import subprocess
@@ -64,7 +71,8 @@ GROUPS = {
     "sweeps_result": (["jaxrod/sweeps/result.py"], ["tests/test_sweep.py"]),
 }
 
-STATUS = ("killed", "survived", "no tests", "timeout", "suspicious", "segfault", "skipped", "not checked")
+STATUS = ("killed", "survived", "no tests", "timeout", "suspicious", "segfault", "skipped", "not checked",
+          "not sampled")
 
 
 def _config(modules, tests) -> str:
@@ -81,9 +89,20 @@ def _config(modules, tests) -> str:
     ])
 
 
-def run_group(name: str, jobs: int, only: list[str] | None = None, earlier: dict | None = None) -> dict:
+def _results(mutmut: str, work: str) -> dict[str, str]:
+    out = subprocess.run([mutmut, "results", "--all", "true"], cwd=work, capture_output=True, text=True).stdout
+    status = {}
+    for line in out.splitlines():
+        m = re.match(r"\s*(\S+): (.+)$", line)
+        if m:
+            status[m.group(1)] = m.group(2).strip()
+    return status
+
+
+def run_group(name: str, jobs: int, only: list[str] | None = None, earlier: dict | None = None,
+              sample: int | None = None) -> dict:
     """Run a group's mutants (or only the mutants `only`, keeping the `earlier` result's status
-    of the others: `--survivors` after new tests)."""
+    of the others: `--survivors` after new tests; or a random `sample` of them)."""
     modules, tests = GROUPS[name]
     work = tempfile.mkdtemp(prefix=f"jaxrod-mutants-{name}-")
     for d in ("jaxrod", "tests"):
@@ -96,18 +115,21 @@ def run_group(name: str, jobs: int, only: list[str] | None = None, earlier: dict
     mutmut = os.path.join(os.path.dirname(sys.executable), "mutmut")
     t0 = time.time()
     print(f"== {name}: mutating {', '.join(modules)} against {', '.join(tests)}", flush=True)
+    if sample is not None and only is None:
+        # make the mutants and the test statistics (mutmut stops at the unknown name), then draw
+        subprocess.run([mutmut, "run", "--max-children", str(jobs), "no-such-mutant"], cwd=work,
+                       check=False, capture_output=True)
+        names = sorted(_results(mutmut, work))
+        only = sorted(random.Random(0).sample(names, min(sample, len(names))))
+        print(f"   {len(only)} of {len(names)} mutants drawn", flush=True)
+        earlier = {"status": {k: "not sampled" for k in names}, "seconds": 0.0}
     subprocess.run([mutmut, "run", "--max-children", str(jobs), *(only or [])], cwd=work, check=False)
-    out = subprocess.run([mutmut, "results", "--all", "true"], cwd=work, capture_output=True, text=True).stdout
-    status = {}
-    for line in out.splitlines():
-        m = re.match(r"\s*(\S+): (.+)$", line)
-        if m:
-            status[m.group(1)] = m.group(2).strip()
+    status = _results(mutmut, work)
     if only is not None and earlier is not None:
         status = {**earlier["status"], **{k: status.get(k, "not checked") for k in only}}
     diffs = {}
     for key, s in status.items():
-        if s != "killed":
+        if s not in ("killed", "not sampled"):
             diffs[key] = subprocess.run([mutmut, "show", key], cwd=work, capture_output=True, text=True).stdout
     shutil.rmtree(work, ignore_errors=True)
     seconds = round(time.time() - t0, 1) + (earlier["seconds"] if only is not None and earlier else 0.0)
@@ -120,11 +142,21 @@ def summarise(group: dict, equivalent: dict) -> dict:
     for key, s in group["status"].items():
         counts[s if s in counts else "suspicious"] += 1
     made = len(group["status"])
-    eq = [k for k, s in group["status"].items() if k in equivalent and s != "killed"]
+    eq = [k for k, s in group["status"].items() if k in equivalent and s not in ("killed", "not sampled")]
     counts["equivalent"] = len(eq)
     counts["made"] = made
-    counts["score"] = counts["killed"] / (made - len(eq)) if made > len(eq) else float("nan")
+    counts["run"] = made - counts["not sampled"]
+    n = counts["run"] - len(eq)
+    counts["score"] = counts["killed"] / n if n > 0 else float("nan")
+    counts["interval"] = _wilson(counts["killed"], n) if counts["not sampled"] else None
     return counts
+
+
+def _wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """95 % Wilson score interval of a sampled kill rate k / n."""
+    p, d = k / n, 1 + z * z / n
+    c, h = (p + z * z / (2 * n)) / d, z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return c - h, c + h
 
 
 def _commit() -> str:
@@ -139,24 +171,29 @@ def write_report(results: dict, out: str):
     equivalent = json.load(open(os.path.join(ROOT, "tools", "mutants_equivalent.json")))
     os.makedirs(out, exist_ok=True)
     rows, body = [], []
-    total = {"made": 0, "killed": 0, "equivalent": 0}
+    total = {"made": 0, "run": 0, "killed": 0, "equivalent": 0}
     for name, g in results.items():
         c = summarise(g, equivalent)
         for k in total:
             total[k] += c[k]
-        rows.append(f"| {name} ({g.get('commit', '?')}, {g.get('date', '?')}) | {c['made']} | {c['killed']} | {c['survived']} | {c['no tests']} | {c['timeout']} | "
-                    f"{c['equivalent']} | {100 * c['score']:.1f} % | {g['seconds']:.0f} s |")
+        score = f"{100 * c['score']:.1f} %"
+        if c["interval"]:
+            score += f" ({100 * c['interval'][0]:.0f}–{100 * c['interval'][1]:.0f} %)"
+        rows.append(f"| {name} ({g.get('commit', '?')}, {g.get('date', '?')}) | {c['made']} | {c['run']} | {c['killed']} | {c['survived']} | {c['no tests']} | {c['timeout']} | "
+                    f"{c['equivalent']} | {score} | {g['seconds']:.0f} s |")
         for key, diff in g["diffs"].items():
             s = g["status"][key]
             why = f" — equivalent: {equivalent[key]}" if key in equivalent else ""
             body.append(f"### {key}: {s}{why}\n\n```diff\n{diff.strip()}\n```\n")
-    score = total["killed"] / max(total["made"] - total["equivalent"], 1)
+    score = total["killed"] / max(total["run"] - total["equivalent"], 1)
     head = [f"# Mutation testing (mutmut), commit {_commit()}, {datetime.date.today()}", "",
-            "Score = killed / (made − equivalent); a mutant without a test or that timed out counts as not killed.", "",
-            "| group | made | killed | survived | no tests | timeout | equivalent | score | time |",
-            "|---|---|---|---|---|---|---|---|---|", *rows, "",
-            f"**All groups run: {total['killed']} killed of {total['made'] - total['equivalent']} non-equivalent "
-            f"mutants, {100 * score:.1f} %.**", "", "## Mutants not killed", ""]
+            "Score = killed / (run − equivalent); a mutant without a test or that timed out counts as not killed. "
+            "A group with fewer mutants run than made was run on a uniform random sample (seed 0); "
+            "its score has the sample's 95 % Wilson interval.", "",
+            "| group | made | run | killed | survived | no tests | timeout | equivalent | score | time |",
+            "|---|---|---|---|---|---|---|---|---|---|", *rows, "",
+            f"**All groups: {total['killed']} killed of {total['run'] - total['equivalent']} non-equivalent "
+            f"mutants run, {100 * score:.1f} %.**", "", "## Mutants not killed", ""]
     with open(os.path.join(out, "report.md"), "w") as f:
         f.write("\n".join(head + body))
     with open(os.path.join(out, "report.json"), "w") as f:
@@ -173,6 +210,8 @@ def main(argv=None) -> int:
     p.add_argument("--jobs", type=int, default=2, help="mutants run side by side")
     p.add_argument("--survivors", action="store_true",
                    help="rerun only the mutants the report lists as not killed (after new tests)")
+    p.add_argument("--sample", type=int, default=None,
+                   help="run a uniform random sample of this many mutants per group (seed 0)")
     a = p.parse_args(argv)
     bad = [g for g in a.groups if g not in GROUPS]
     if bad:
@@ -184,8 +223,8 @@ def main(argv=None) -> int:
         results.update(old["groups"])  # each group's own commit is in the report
     for g in a.groups or list(GROUPS):
         earlier = results.get(g) if a.survivors else None
-        only = [k for k, v in earlier["status"].items() if v != "killed"] if earlier else None
-        results[g] = run_group(g, a.jobs, only, earlier)
+        only = [k for k, v in earlier["status"].items() if v not in ("killed", "not sampled")] if earlier else None
+        results[g] = run_group(g, a.jobs, only, earlier, a.sample)
         write_report(results, a.out)
     return 0
 
