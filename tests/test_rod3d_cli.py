@@ -96,3 +96,27 @@ def test_departure_search_of_the_3d_rod_lands_in_the_bisection_bracket():
     bis, _ = jr.boundary.critical_velocity(rod, 5.0, method="bisection", **kw)
     assert int(dep.result) == 0 and int(bis.result) == 0
     assert float(bis.lo) <= float(dep.root) <= float(bis.hi)
+    # 12 runs each (measured; 30 for the departure search while its float32 friction pass
+    # overflowed the tangents near the root: `Rod3D.for_tangents`)
+    assert int(dep.evaluations) <= int(bis.evaluations)
+
+
+@pytest.mark.slow  # 12 segments, one forward-mode run (~30 s)
+def test_departure_rate_of_the_3d_rod_is_finite_next_to_its_boundary():
+    """0.01 % above v₀* (24.65 mm/s at ΔF = 5 N, μ = 0.3, 12 segments) the run's tangent
+    stays finite (it was NaN from step 928: 1/|g|⁴ of a vanishing slip impulse in the float32
+    friction pass), and u/(v₀ − v₀*) is the growth rate measured farther out (53–56 s⁻¹)."""
+    import jax
+
+    import jaxrod as jr
+    from jaxrod.boundary.search import _resolution, _scene
+
+    rod = jr.RodChannel.reference(0.3)
+    n, dt = _resolution(rod, 5.0, "rod3d", 12, 6, None)
+    rate = jax.jit(lambda x: jr.boundary.departure_rate(
+        lambda v: _scene(rod, 5.0, v, "rod3d", n, 6, dt, "sine", jax.random.key(0)), x))
+    (b1, u1), (b2, u2) = rate(0.02466), rate(0.02470)
+    assert bool(b1) and bool(b2) and 0 < float(u1) < float(u2)
+    lam = (float(u2) - float(u1)) / 4e-5
+    assert 40 < lam < 70
+    assert 0.02464 < 0.02466 - float(u1) / lam < 0.02466

@@ -43,15 +43,17 @@ def rod_indicator(scene: Scene, t1: float = 0.5):
     return jnp.log(jnp.maximum(amp, 1e-300) / scene.threshold)
 
 
-def crossing_state(scene: Scene, t1: float = 2.0):
+def crossing_state(scene: Scene, t1: float = 2.0, tangents: bool = False):
     """The state where the run of `scene` stops: `((q, v), buckled)`, at the first step past the
     buckling threshold, when the rod is stuck (then it stays stuck; the reduced models are
     frozen at the step they stick, the 3D rod at the next of 200 saves), or at `t1` [s] —
     whichever comes first, so that both labels are cheap. Differentiable (forward mode) in every
-    leaf of the scene at a fixed step count."""
+    leaf of the scene at a fixed step count; with `tangents`, the model is
+    `AbstractModel.for_tangents` (what a forward-mode run needs)."""
     q0, v0 = scene.initial_state()
+    model = scene.model().for_tangents() if tangents else scene.model()
     sol = simulate(
-        scene.model(), scene.integrator(), q0, v0, t1, n_save=201,
+        model, scene.integrator(), q0, v0, t1, n_save=201,
         options=RunOptions(buckle_threshold=scene.threshold, save_state=False), throw=False,
     )
     return (sol.q_final, sol.v_final), sol.buckled
@@ -86,7 +88,7 @@ def departure_rate(scene_of, x, t1: float = 2.0):
     """
     x = jnp.asarray(x, jnp.result_type(float))
     (_, v), (dq, _), buckled = jax.jvp(
-        lambda x: crossing_state(scene_of(x), t1), (x,), (jnp.ones_like(x),), has_aux=True
+        lambda x: crossing_state(scene_of(x), t1, tangents=True), (x,), (jnp.ones_like(x),), has_aux=True
     )
     dq, v = scene_of(x).model().translation(dq, v)  # the 3D rod: node positions and velocities
     return buckled, jnp.where(buckled, _along(v, dq), jnp.nan)
@@ -102,7 +104,7 @@ def departure_sensitivities(scene_of, x, params: dict, t1: float = 2.0) -> dict:
     **Returns:** a dict with the keys of `params`.
     """
     x = jnp.asarray(x, jnp.result_type(float))
-    q_of = lambda xp: crossing_state(scene_of(*xp), t1)[0][0]
+    q_of = lambda xp: crossing_state(scene_of(*xp), t1, tangents=True)[0][0]
     keys = list(params)
     # the tangents along x and along every parameter, as one batched forward-mode run
     unit = lambda i: (jnp.asarray(i == 0, x.dtype),

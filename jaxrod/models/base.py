@@ -86,6 +86,11 @@ class AbstractModel(eqx.Module):
         other). Default: `(q, v)` themselves."""
         return q, v
 
+    def for_tangents(self) -> AbstractModel:
+        """This model as forward-mode derivatives of its runs need it (the departure rate's
+        tangents): itself by default; the 3D rod runs its friction pass in float64."""
+        return self
+
     def under_lateral_force(self, force: Float[Array, " n"]) -> AbstractModel:
         """This model with a constant lateral force per length `force` [N/m] added, given at
         `sample_points` (the forcing phase of `jaxrod.RandomForce`). Default: the acceleration

@@ -12,6 +12,7 @@ effect of α, is in docs/physics.md §7.
 
 from __future__ import annotations
 
+import copy
 from typing import ClassVar
 
 import equinox as eqx
@@ -34,10 +35,9 @@ __all__ = ["Rod3D"]
 class Rod3D(AbstractModel):
     """The discrete 3D rod in the channel. See the module docstring for every equation.
 
-    A model like the others: it runs through [`jaxrod.simulate`][] with
-    [`jaxrod.ProjectedLeapfrog`][] (its default `scheme`) or [`jaxrod.ProjectedVerlet`][] and their
-    friction law ([`jaxrod.Coulomb`][] or [`jaxrod.Tanh`][]), in sweeps and under `jit`/`vmap`. Its
-    coordinates are a [`Rod3DPosition`][], its velocities a [`Rod3DVelocity`][] (both: `initial_state`).
+    A model like the others: it runs through [`jaxrod.simulate`][] with [`jaxrod.ProjectedLeapfrog`][]
+    (its `scheme`) or [`jaxrod.ProjectedVerlet`][] and a friction law ([`jaxrod.Coulomb`][], [`jaxrod.Tanh`][]),
+    in sweeps and under `jit`/`vmap`; state: [`Rod3DPosition`][], [`Rod3DVelocity`][] (`initial_state`).
 
     **Arguments:**
 
@@ -62,23 +62,22 @@ class Rod3D(AbstractModel):
       under its weight, k = w/δ₀^{3/2}. The straight rod wrinkles into the wall once F²/(4EI) >
       1.5w/δ₀ (≈ 50 N for the reference rod): stiffen the wall for larger loads (docs/rod3d.md).
     - `contact_damping`: Hunt–Crossley ζ [s/m], ≥ 0 (default 0: energy is conserved at μ = 0).
-    - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (for
-      quasi-static tests; 0 by default).
+    - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (default 0).
     - `rotary_scale`: α ≥ 1 on the transverse rotary inertia (default: see module docstring).
     - `friction_sweeps`: the most projected Gauss–Seidel sweeps of the red–black friction pass
       per half step (static, default 64; 1: a single sweep, the coupled impulses of
       neighbouring nodes then left unconverged, which lets held contacts creep).
     - `friction_tol`: the pass stops once no contact impulse changes by more than this
       fraction of the largest friction bound μ_s N h in a sweep (default 1e-4); each pass
-      starts from the last one's impulses (sticking and slipping contacts still change them
-      between passes: 2–9 sweeps, 5–7 for a held rod). The last pass's residual
+      starts from the last one's impulses (2–9 sweeps, 5–7 for a held rod). The last pass's residual
       and sweeps: `v.residual`, `v.sweeps` (observables `friction_residual`, `friction_sweeps`).
     - `friction_at`: `"surface"` (default: friction at the contact point, so it also rolls and
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
       models assume) (static).
     - `friction_precision`: `"float32"` (default) or `"float64"`, the dtype of the friction pass
       (static; positions and forces stay float64, docs/physics.md §7): a 500-segment step 15 %
-      cheaper, amplitudes moved ~1e-6 relative; a `friction_tol` below ~1e-6 is not reached.
+      cheaper, amplitudes moved ~1e-6 relative; a `friction_tol` below ~1e-6 is not reached;
+      forward-mode derivatives run in float64 (`for_tangents`).
     - `body_force`: extra force per length [N/m], a 3-vector or one per node (n + 1, 3) (default 0).
     - `gravity`: include gravity (static, default True).
     """
@@ -192,8 +191,7 @@ class Rod3D(AbstractModel):
         return jnp.stack([0.0 * g, 0.0 * g, -g])
 
     def held(self) -> tuple[Bool[Array, "n1 3"], Bool[Array, "n 3"]]:
-        """Which node velocity components are prescribed, and which segment spin components
-        (material frame) are held at zero (`jaxrod.rod3d.state.held_pattern`)."""
+        """Node velocity components prescribed, segment spins held at zero (`state.held_pattern`)."""
         return tuple(jnp.asarray(a) for a in held_pattern(self))
 
     def prescribed_velocity(self) -> Float[Array, "n1 3"]:
@@ -335,13 +333,10 @@ class Rod3D(AbstractModel):
     # -- constraints and the step limit -------------------------------------------------------
     def constrain(self, v, w):
         held_n, held_s = self.held()
-        v = jnp.where(held_n, self.prescribed_velocity(), v)
-        w = jnp.where(held_s, 0.0, w)
-        return v, w
+        return jnp.where(held_n, self.prescribed_velocity(), v), jnp.where(held_s, 0.0, w)
 
     def max_frequency(self, q: Rod3DPosition | None = None) -> Float[Array, ""]:
-        """ω_max [rad/s] at `q` (default: straight, under its axial preload), in closed form, a
-        bound 0.02–0.08 % above the measured one: `jaxrod.rod3d.stiffness.frequency_bound`."""
+        """ω_max [rad/s] at `q` (default: straight, preloaded): `jaxrod.rod3d.stiffness.frequency_bound`."""
         return frequency_bound(self, q)
 
     # -- states ------------------------------------------------------------------------------
@@ -364,8 +359,7 @@ class Rod3D(AbstractModel):
 
     # -- where a perturbation field is given (the AbstractModel interface) -------------------
     def sample_points(self) -> Float[Array, " n1"]:
-        """The n + 1 nodes of the straight rod, s_j = jL/n [m] (ends included, where every
-        sine field vanishes)."""
+        """The n + 1 nodes of the straight rod, s_j = jL/n [m] (ends included)."""
         return jnp.arange(self.n + 1, dtype=self.rod.L.dtype) * (self.rod.L / self.n)
 
     @property
@@ -379,6 +373,12 @@ class Rod3D(AbstractModel):
 
     def translation(self, q: Rod3DPosition, v: Rod3DVelocity):  # spins are not rates of the directors
         return q.x, v.v
+
+    def for_tangents(self) -> Rod3D:
+        """This rod with a float64 friction pass (float32 tangents overflow at a vanishing slip)."""
+        new = copy.copy(self)
+        object.__setattr__(new, "friction_precision", "float64")  # a static field
+        return new
 
     def under_lateral_force(self, force) -> Rod3D:
         """This rod with the lateral (y) force per length `force` [N/m] at its nodes added to `body_force`."""
