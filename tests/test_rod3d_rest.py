@@ -64,3 +64,28 @@ def test_the_stick_test_at_rest_holds_exactly_the_forces_inside_the_static_cone(
     assert stuck_at_rest(m, m.initial_state(F + 5.0))
     scene = Scene(rod, 40.0, make_perturbation("random-shape", 2e-3, 6, jax.random.key(0)), "rod3d", n=12, dt=1e-5)
     assert not stuck_at_rest(scene.model(), scene.initial_state())
+
+
+def test_a_lateral_force_is_added_to_the_body_force_at_every_node():
+    """`under_lateral_force` (the random-position forcing): the y component of each node's body
+    force grows by the given force per length; x and z are unchanged."""
+    rod = jr.RodChannel.reference(0.3)
+    model = Rod3D(rod, 6, body_force=jnp.array([0.1, 0.2, -0.3]))
+    f = jnp.linspace(-1.0, 1.0, 7)
+    forced = model.under_lateral_force(f)
+    np.testing.assert_array_equal(np.asarray(forced.body_force), np.stack([np.full(7, 0.1), 0.2 + np.asarray(f),
+                                                                           np.full(7, -0.3)], -1))
+
+
+def test_a_free_rod_in_space_is_held_only_where_its_supports_hold_it():
+    """`static_equilibrium` without a channel: one flag per node and per segment, true only for
+    the held ones (nothing else holds a rod in space)."""
+    from jaxrod.rod3d.contact import static_equilibrium
+
+    model = Rod3D(jr.RodChannel.reference(0.3), 6, channel=False, ends="clamped")
+    q, v = model.initial_state(1.0)
+    a = model.acceleration(q)
+    nodes, segments = static_equilibrium(model, q.x, q.Q, a.f, a.tau, a.N)
+    assert nodes.shape == (7,) and segments.shape == (6,)
+    assert nodes.tolist() == [True, False, False, False, False, False, True]
+    assert segments.tolist() == [True, False, False, False, False, True]

@@ -362,3 +362,42 @@ def test_vector_coulomb_impulse_from_poor_and_degenerate_guesses():
     zero = (three(0.0), three(0.0))
     d = jax.grad(lambda u2: jr.Coulomb().impulse_2d((three(3.0), u2), W, c3, c3, zero)[0][1].sum())(three(0.0))
     np.testing.assert_allclose(d, [-1 / 6] * 3, rtol=1e-9)
+
+
+def test_linear_flow_is_the_exact_free_motion():
+    """`linear_flow` (the exponential integrator's linear part): A(h) = A cos ωh + Ȧ sin(ωh)/ω
+    for k = ω² > 0 and cosh/sinh for k < 0, on both sides of the Stumpff series' switch (kh² = 1e-3)."""
+    for k, h in ((400.0, 1e-3), (400.0, 0.05), (-900.0, 0.02), (-900.0, 1e-4)):
+        m = jr.SingleMode(k=k, f_s=0.0, f_d=0.0)
+        A, Ad = m.linear_flow(jnp.asarray(0.3), jnp.asarray(-2.0), 0.0, h)
+        w = math.sqrt(abs(k))
+        if k > 0:
+            ref = (0.3 * math.cos(w * h) - 2.0 * math.sin(w * h) / w, -0.3 * w * math.sin(w * h) - 2.0 * math.cos(w * h))
+        else:
+            ref = (0.3 * math.cosh(w * h) - 2.0 * math.sinh(w * h) / w, 0.3 * w * math.sinh(w * h) - 2.0 * math.cosh(w * h))
+        assert (float(A), float(Ad)) == pytest.approx(ref, rel=1e-12, abs=1e-14)
+
+
+def test_atan_ratio_and_the_slip_phase_duration_by_hand():
+    """T(y) = atan(√y)/√y (atanh for y < 0) on both sides of its series' switch |y| = 1e-3, and
+    the time a slip decelerated by ĝ > 0 against k = ω² > 0 takes to stop: atan(v̂ω/ĝ)/ω."""
+    from jaxrod.models.single_mode import _atan_ratio, _phase_duration
+
+    for y in (5e-4, -5e-4, 0.3, -0.3, 4.0):
+        r = math.sqrt(abs(y))
+        ref = math.atan(r) / r if y > 0 else math.atanh(r) / r
+        assert float(_atan_ratio(jnp.asarray(y))) == pytest.approx(ref, rel=1e-14)
+    for v, g, k in ((1.0, 0.5, 4.0), (0.2, 3.0, 100.0)):
+        w = math.sqrt(k)
+        assert float(_phase_duration(jnp.asarray(v), jnp.asarray(g), jnp.asarray(k))) == pytest.approx(
+            math.atan(v * w / g) / w, rel=1e-12)
+
+
+def test_galerkin_energy_terms_are_named_and_sum_to_the_energy():
+    """The Galerkin model's energies by name (what `Solution.energies` reports): kinetic ½ v·Mv."""
+    rod = jr.RodChannel.reference(0.3)
+    m = jr.GalerkinModel.from_rod(rod, 4, F=float(th.reference_load(rod)))
+    q, v = jnp.array([1e-3, 0.0, -2e-3, 0.0]), jnp.array([0.1, 0.2, 0.0, -0.1])
+    e = m.energy_terms(q, v, 0.0)
+    assert "kinetic" in e and float(e["kinetic"]) == pytest.approx(float(m.kinetic_energy(v)), rel=1e-14)
+    assert float(e["kinetic"]) > 0
