@@ -282,3 +282,49 @@ def test_critical_load_without_sensitivities_runs_no_tangents(monkeypatch):
     res, sens = bd.critical_load(ROD, 0.02, model="field", n=24, dt=jr.scene.Scene(ROD, 2.0, kind="field", n=24).step(),
                                  bracket=(0.1, 20.0), rtol=1e-2, sensitivities=())
     assert sens == {} and int(res.result) == 0
+
+
+def test_bisection_stops_at_its_tolerance():
+    """Bisection on a boolean label: one run per halving (in log x) until the bracket is within
+    rtol, the geometric midpoints by hand."""
+    c = 0.3
+    res = bd.bisection(lambda x: x > c, 1e-3, 1.0, rtol=1e-4, max_iter=200)
+    lo, hi, n = 1e-3, 1.0, 0
+    while hi - lo > 1e-4 * hi:
+        x = math.sqrt(lo * hi)
+        lo, hi = (lo, x) if x > c else (x, hi)
+        n += 1
+    assert float(res.lo) == pytest.approx(lo, rel=1e-12) and float(res.hi) == pytest.approx(hi, rel=1e-12)
+    assert abs(int(res.evaluations) - n) <= 2 and int(res.result) == 0
+
+
+def test_newton_starts_where_it_is_told():
+    """A linear g: Newton from `hi` lands on the root in one step; from the midpoint it costs
+    the midpoint's evaluation more."""
+    g = lambda x: 2.0 * (x - 0.3)
+    from_hi = bd.safeguarded_newton(g, 0.1, 1.0, rtol=1e-10, start="hi")
+    from_mid = bd.safeguarded_newton(g, 0.1, 1.0, rtol=1e-10, start="mid")
+    assert float(from_hi.root) == pytest.approx(0.3, rel=1e-12) and float(from_mid.root) == pytest.approx(0.3, rel=1e-12)
+    assert int(from_mid.evaluations) == int(from_hi.evaluations) + 1
+
+
+def test_a_vmapped_curve_keeps_its_bracket():
+    """`boundary_curve` without continuation searches in the `bracket` it is given: one that
+    lies below every root is reported invalid at every load (single mode: Newton on the exact
+    solution)."""
+    r, _ = bd.boundary_curve(ROD, [2.0, 8.0], model="mode", bracket=(1e-4, 1e-3), sensitivities=())
+    assert np.all(np.asarray(r.result) == bd.ROOT_RESULTS.invalid_bracket)  # v₀* is 15-45 mm/s
+
+
+def test_smooth_indicator_against_an_independent_integration():
+    """x'' − x + tanh(x'/ε') = 0 (units x = A/a, τ = λt, ε' = ε/(λa)) from x = 0, x' = Ȧ₀/(aλ):
+    the indicator is x(horizon) − 1, here against SciPy's Radau at tight tolerances."""
+    from scipy.integrate import solve_ivp
+
+    k, f, eps, Ad0, T = -4.0, 2.0, 0.05, 1.2, 4.0
+    lam, a = math.sqrt(4.0), f / 4.0
+    e = eps / (a * lam)
+    sol = solve_ivp(lambda t, y: [y[1], y[0] - math.tanh(y[1] / e)], (0, T), [0.0, Ad0 / (a * lam)],
+                    method="Radau", rtol=1e-11, atol=1e-13)
+    g = bd.smooth_single_mode_indicator(jnp.asarray(Ad0), jnp.asarray(k), jnp.asarray(f), eps, horizon=T)
+    assert float(g) == pytest.approx(sol.y[0, -1] - 1.0, rel=1e-6, abs=1e-8)
