@@ -328,3 +328,16 @@ def test_smooth_indicator_against_an_independent_integration():
                     method="Radau", rtol=1e-11, atol=1e-13)
     g = bd.smooth_single_mode_indicator(jnp.asarray(Ad0), jnp.asarray(k), jnp.asarray(f), eps, horizon=T)
     assert float(g) == pytest.approx(sol.y[0, -1] - 1.0, rel=1e-6, abs=1e-8)
+
+
+def test_critical_load_of_another_mode_is_its_p7():
+    """The single mode's ΔF* for mode 7 (above the critical mode's F⁰₆): P7 of mode 7."""
+    v0 = 15e-3
+    dF = float(th.critical_load_velocity(ROD, 7, v0 / ROD.R) - th.reference_load(ROD))
+    res, _ = bd.critical_load(ROD, v0, model="mode", mode=7, bracket=(dF / 3, 3 * dF), sensitivities=())
+    assert float(res.root) == pytest.approx(dF, rel=1e-6)
+
+
+def test_a_traced_load_without_n_and_dt_is_refused_by_name():
+    with pytest.raises(ValueError, match=r"^pass n and dt explicitly when the rod or the load is traced"):
+        jax.vmap(lambda dF: bd.critical_velocity(ROD, dF, model="field", sensitivities=())[0].root)(jnp.array([2.0, 4.0]))

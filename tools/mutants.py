@@ -153,7 +153,7 @@ def summarise(group: dict, equivalent: dict) -> dict:
     counts["run"] = made - counts["not sampled"]
     n = counts["run"] - len(eq)
     counts["score"] = counts["killed"] / n if n > 0 else float("nan")
-    counts["interval"] = _wilson(counts["killed"], n) if counts["not sampled"] else None
+    counts["interval"] = _wilson(counts["killed"], n) if counts["not sampled"] and n > 0 else None
     return counts
 
 
