@@ -10,11 +10,16 @@ this machine side by side in one process, wall times after compilation (best of 
 - **wall time**: the E3 boundary curve (20 loads, 1 to 64 N, rtol 1e-3) with and without the
   IFT sensitivities, against the 480-point grid map of `jaxrod map` (20 × 24, one μ);
 - **E4**: the critical-load curve of 8 μ × 8 random velocity perturbations (15 mm/s, n = 128)
-  by the departure search, against the previous release's Newton iteration on max|θ(0.5 s)|.
+  by the departure search, against the previous release's Newton iteration on max|θ(0.5 s)|;
+- **the 3D rod** (`--rod3d N ...`, alone): v₀* at ΔF = 5 N, rtol 1e-2, by the departure search on
+  its node positions and by label bisection, at N segments, from [1e-4, 1] m/s and from the
+  field model's v₀* (bracket a factor 2 either side): runs, root, bracket and wall time
+  (`benchmarks/results/boundary_cost_rod3d.csv`).
 
 Writes `benchmarks/results/boundary_cost.csv` (plain numbers).
 
     python benchmarks/boundary_cost.py [--skip-e4]
+    python benchmarks/boundary_cost.py --rod3d 12 60
 """
 
 from __future__ import annotations
@@ -125,11 +130,37 @@ def e4(rows):
           f"{np.median(gap) if gap.size else math.nan:.1e} (the old indicator's root lies above the 2 s label boundary)")
 
 
+def rod3d(segments):
+    """The 3D rod's v₀* at ΔF = 5 N, rtol 1e-2, by both methods, from the wide bracket and from
+    the field model's v₀* (a prediction: bracket a factor 2 either side, first run there)."""
+    vf = float(bd.critical_velocity(ROD, 5.0, model="field", rtol=1e-4, sensitivities=())[0].root)
+    print(f"field model v0* = {1e3 * vf:.3f} mm/s (the prediction)", flush=True)
+    rows = []
+    for n in segments:
+        for method in ("bisection", "departure"):  # one compiled search per method and n
+            for name, bracket, start in (("wide", (1e-4, 1.0), None), ("predicted", (vf / 2, 2 * vf), vf)):
+                t0 = time.perf_counter()
+                r = jax.block_until_ready(bd.critical_velocity(
+                    ROD, 5.0, model="rod3d", n=n, rtol=1e-2, method=method, bracket=bracket, start=start,
+                    sensitivities=())[0])
+                dt = time.perf_counter() - t0
+                rows.append(dict(segments=n, method=method, bracket=name, result=int(r.result), runs=int(r.evaluations),
+                                 root=float(r.root), lo=float(r.lo), hi=float(r.hi), wall_s=dt, v0_field=vf))
+                print(f"3D rod, {n} segments, {method}, {name} bracket: {int(r.evaluations)} runs, "
+                      f"v0* = {1e3 * float(r.root):.3f} mm/s in [{1e3 * float(r.lo):.3f}, {1e3 * float(r.hi):.3f}], "
+                      f"{dt:.1f} s (the first of a method: with its compilation)", flush=True)
+    os.makedirs(OUT, exist_ok=True)
+    write_csv(os.path.join(OUT, "boundary_cost_rod3d.csv"), rows)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--skip-e4", action="store_true")
+    p.add_argument("--rod3d", type=int, nargs="+", metavar="N", help="only the 3D rod's search, at N segments")
     a = p.parse_args()
     print(f"{jax.local_device_count()} device(s), {jax.devices()[0].platform}")
+    if a.rod3d:
+        return rod3d(a.rod3d)
     rows = []
     evaluations(rows)
     wall_time(rows)
