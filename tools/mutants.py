@@ -13,10 +13,12 @@ killed / (made − equivalent), and the diff of every survivor.
     python tools/mutants.py                  # every group
     python tools/mutants.py theory friction  # some groups
     python tools/mutants.py rod3d --sample 60  # a random sample of a group's mutants
+    python tools/mutants.py --full             # every mutant (models, rod3d, boundary: days)
 
 A group whose every mutant would take hours on this CPU (each mutant compiles JAX functions for
-its tests) is run on a uniform random sample (`--sample K`, seed 0): the report then gives the
-sample's score with its 95 % Wilson interval, and the mutants left out as "not sampled". A
+its tests) is run on a uniform random sample (`--sample K`, seed 0; by default the sizes in
+`SAMPLE`): the report then gives the sample's score with its 95 % Wilson interval, and the
+mutants left out as "not sampled". A
 sampled group interrupted (Ctrl-C) keeps the mutants it ran; those drawn but not reached count
 as not sampled (mutmut runs the drawn mutants in order of their tests' estimated time, so an
 interrupted sample leans towards mutants covered by fewer or faster tests).
@@ -73,6 +75,9 @@ GROUPS = {
     "stability_map": (["jaxrod/stability_map.py"], ["tests/test_mutants_stability_map.py"]),
     "sweeps_result": (["jaxrod/sweeps/result.py"], ["tests/test_sweep.py"]),
 }
+
+# the groups run on a sample by default (`make mutants`): every mutant would take a day here
+SAMPLE = {"models": 20, "rod3d": 60, "boundary": 40, "stability_map": 200}
 
 STATUS = ("killed", "survived", "no tests", "timeout", "suspicious", "segfault", "skipped", "not checked",
           "not sampled")
@@ -216,7 +221,8 @@ def main(argv=None) -> int:
     p.add_argument("--survivors", action="store_true",
                    help="rerun only the mutants the report lists as not killed (after new tests)")
     p.add_argument("--sample", type=int, default=None,
-                   help="run a uniform random sample of this many mutants per group (seed 0)")
+                   help=f"run a uniform random sample of this many mutants per group (seed 0; default {SAMPLE})")
+    p.add_argument("--full", action="store_true", help="every mutant of every group (no default samples)")
     a = p.parse_args(argv)
     bad = [g for g in a.groups if g not in GROUPS]
     if bad:
@@ -229,7 +235,8 @@ def main(argv=None) -> int:
     for g in a.groups or list(GROUPS):
         earlier = results.get(g) if a.survivors else None
         only = [k for k, v in earlier["status"].items() if v not in ("killed", "not sampled")] if earlier else None
-        results[g] = run_group(g, a.jobs, only, earlier, a.sample)
+        sample = a.sample if a.sample is not None or a.full else SAMPLE.get(g)
+        results[g] = run_group(g, a.jobs, only, earlier, sample)
         write_report(results, a.out)
     return 0
 
