@@ -293,3 +293,25 @@ def test_two_converged_roots_are_enough_for_the_searched_exponent(monkeypatch):
     res = SweepResult({"index": np.arange(3)}, {"result": np.zeros(3, int)}, (3,), ("dF",), {"n": 48, "dt": 2e-5})
     out = sm._searched(res, np.array([1.0, 4.0, 16.0]), 0.3, "field", 6, 2.0, 1e-3, False)
     assert out["curve_exponent"] == pytest.approx(math.log(2e-3 / 8e-3) / math.log(4.0), rel=1e-12)
+
+
+def test_a_galerkin_map_searches_its_boundary_with_its_own_settings(monkeypatch):
+    """For the Galerkin (or field) model and μ > 0 the map searches its boundary (here a
+    stand-in for `_searched`) with the map's μ, model, mode, horizon, tolerance and progress,
+    on the sweep it ran with the map's n, mode and μ; μ = 0 is not searched; without `out`
+    nothing is written."""
+    calls = []
+
+    def searched(res, dF, mu, model, mode, t1, rtol, progress):
+        calls.append((res, list(dF), mu, model, mode, t1, rtol, progress))
+        return {"curve_v0": [1e-2, 1e-3]}
+
+    monkeypatch.setattr(sm, "_searched", searched)
+    s = sm.stability_map(mus=(0.3, 0.0), dF=[1.0, 16.0], v0=[2e-3, 0.1], model="galerkin", n=8, mode=5,
+                         out=None, progress=False, t1=0.25, curve_rtol=1e-2, chunk_size=3)
+    assert len(calls) == 1
+    res, dF, mu, model, mode, t1, rtol, progress = calls[0]
+    assert (dF, mu, model, mode, t1, rtol, progress) == ([1.0, 16.0], 0.3, "galerkin", 5, 0.25, 1e-2, False)
+    spec = res.meta["spec"]
+    assert (spec["model"], spec["mu"], spec["mode"], spec["n"], spec["t1"]) == ("galerkin", 0.3, 5, 8, 0.25)
+    assert s["n"] == 8 and s["maps"]["0.3"]["curve_v0"] == [1e-2, 1e-3] and "curve_v0" not in s["maps"]["0"]
