@@ -299,13 +299,14 @@ def test_bisection_stops_at_its_tolerance():
 
 
 def test_newton_starts_where_it_is_told():
-    """A linear g: Newton from `hi` lands on the root in one step; from the midpoint it costs
-    the midpoint's evaluation more."""
-    g = lambda x: 2.0 * (x - 0.3)
+    """g = e^{8x} − e^{2.4} (root 0.3) on [0.1, 1]: Newton from `hi` creeps down the steep convex
+    side (12 evaluations, measured), from the geometric midpoint 0.316 it is next to the root
+    (7, the midpoint's own included)."""
+    g = lambda x: jnp.exp(8.0 * x) - math.exp(2.4)
     from_hi = bd.safeguarded_newton(g, 0.1, 1.0, rtol=1e-10, start="hi")
     from_mid = bd.safeguarded_newton(g, 0.1, 1.0, rtol=1e-10, start="mid")
-    assert float(from_hi.root) == pytest.approx(0.3, rel=1e-12) and float(from_mid.root) == pytest.approx(0.3, rel=1e-12)
-    assert int(from_mid.evaluations) == int(from_hi.evaluations) + 1
+    assert float(from_hi.root) == pytest.approx(0.3, rel=1e-10) and float(from_mid.root) == pytest.approx(0.3, rel=1e-10)
+    assert int(from_hi.evaluations) > int(from_mid.evaluations) + 2
 
 
 def test_a_vmapped_curve_keeps_its_bracket():
@@ -321,7 +322,7 @@ def test_smooth_indicator_against_an_independent_integration():
     the indicator is x(horizon) − 1, here against SciPy's Radau at tight tolerances."""
     from scipy.integrate import solve_ivp
 
-    k, f, eps, Ad0, T = -4.0, 2.0, 0.05, 1.2, 4.0
+    k, f, eps, Ad0, T = -4.0, 6.0, 0.05, 3.5, 4.0  # a λ = 3: ε' = ε/(aλ), not ε·aλ
     lam, a = math.sqrt(4.0), f / 4.0
     e = eps / (a * lam)
     sol = solve_ivp(lambda t, y: [y[1], y[0] - math.tanh(y[1] / e)], (0, T), [0.0, Ad0 / (a * lam)],

@@ -391,6 +391,12 @@ def test_atan_ratio_and_the_slip_phase_duration_by_hand():
         w = math.sqrt(k)
         assert float(_phase_duration(jnp.asarray(v), jnp.asarray(g), jnp.asarray(k))) == pytest.approx(
             math.atan(v * w / g) / w, rel=1e-12)
+    # past the frictionless load (k = −s² < 0) a weak deceleration still stops it, at atanh(v s/g)/s
+    for v, g, k in ((0.5, 0.8, -1.0), (0.1, 2.0, -9.0)):
+        s_ = math.sqrt(-k)
+        assert float(_phase_duration(jnp.asarray(v), jnp.asarray(g), jnp.asarray(k))) == pytest.approx(
+            math.atanh(v * s_ / g) / s_, rel=1e-12)
+    assert math.isinf(float(_phase_duration(jnp.asarray(2.0), jnp.asarray(0.8), jnp.asarray(-1.0))))  # v s > g
 
 
 def test_galerkin_energy_terms_are_named_and_sum_to_the_energy():
