@@ -264,6 +264,11 @@ def test_the_figure_reads_the_same_at_its_size_markers_and_other_modes(tmp_path)
     assert tuple(failed.get_facecolor()[0][:3]) == (0.0, 0.0, 0.0)
     for c in (stable, buckled, failed):
         assert list(c.get_sizes()) == [22]
+    from matplotlib.markers import MarkerStyle
+
+    cross = MarkerStyle("x")
+    np.testing.assert_allclose(buckled.get_paths()[0].vertices,
+                               cross.get_path().transformed(cross.get_transform()).vertices)  # a thin cross
     lines = {ln.get_label(): ln for ln in ax.get_lines()}
     x, y = lines["single-mode theory P6 (slope −1/2)"].get_data()
     np.testing.assert_allclose(y, 1e3 * sm.theory_boundary(jr.RodChannel.reference(0.3), x, 7), rtol=1e-12)
@@ -307,11 +312,20 @@ def test_a_galerkin_map_searches_its_boundary_with_its_own_settings(monkeypatch)
         return {"curve_v0": [1e-2, 1e-3]}
 
     monkeypatch.setattr(sm, "_searched", searched)
-    s = sm.stability_map(mus=(0.3, 0.0), dF=[1.0, 16.0], v0=[2e-3, 0.1], model="galerkin", n=8, mode=5,
+    s = sm.stability_map(mus=(0.25, 0.0), dF=[1.0, 16.0], v0=[2e-3, 0.1], model="galerkin", n=8, mode=5,
                          out=None, progress=False, t1=0.25, curve_rtol=1e-2, chunk_size=3)
     assert len(calls) == 1
     res, dF, mu, model, mode, t1, rtol, progress = calls[0]
-    assert (dF, mu, model, mode, t1, rtol, progress) == ([1.0, 16.0], 0.3, "galerkin", 5, 0.25, 1e-2, False)
+    assert (dF, mu, model, mode, t1, rtol, progress) == ([1.0, 16.0], 0.25, "galerkin", 5, 0.25, 1e-2, False)
     spec = res.meta["spec"]
-    assert (spec["model"], spec["mu"], spec["mode"], spec["n"], spec["t1"]) == ("galerkin", 0.3, 5, 8, 0.25)
-    assert s["n"] == 8 and s["maps"]["0.3"]["curve_v0"] == [1e-2, 1e-3] and "curve_v0" not in s["maps"]["0"]
+    assert (spec["model"], spec["mu"], spec["mode"], spec["n"], spec["t1"]) == ("galerkin", 0.25, 5, 8, 0.25)
+    assert spec["perturbation"] == "sine"
+    assert s["n"] == 8 and s["maps"]["0.25"]["curve_v0"] == [1e-2, 1e-3] and "curve_v0" not in s["maps"]["0"]
+
+
+def test_a_map_writes_to_results_map_by_default(tmp_path, monkeypatch):
+    """Without `out` the files go to results/map under the working folder (as `jaxrod map`)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sm, "plot_maps", lambda results, summary, path: None)
+    sm.stability_map(mus=(0.3,), dF=[1.0], v0=[0.1], model="mode", progress=False, t1=0.2)
+    assert (tmp_path / "results" / "map" / "map.json").exists() and (tmp_path / "results" / "map" / "map.csv").exists()
