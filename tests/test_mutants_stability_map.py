@@ -329,3 +329,14 @@ def test_a_map_writes_to_results_map_by_default(tmp_path, monkeypatch):
     monkeypatch.setattr(sm, "plot_maps", lambda results, summary, path: None)
     sm.stability_map(mus=(0.3,), dF=[1.0], v0=[0.1], model="mode", progress=False, t1=0.2)
     assert (tmp_path / "results" / "map" / "map.json").exists() and (tmp_path / "results" / "map" / "map.csv").exists()
+
+
+def test_buckles_for_every_positive_load_looks_at_every_positive_load():
+    """The flag reads every column with ΔF > 0: one stable member at ΔF = 0.5 N clears it."""
+    dF = np.array([0.5, 2.0])
+    inputs = {"dF": np.repeat(dF, 2), "amplitude": np.tile([1e-3, 1e-2], 2), "index": np.arange(4)}
+    outputs = {"buckled": np.array([False, True, True, True]), "result": np.zeros(4, int)}
+    res = SweepResult(inputs, outputs, (2, 2), ("dF", "amplitude"), {"n": 32, "dt": 1e-5})
+    assert sm._summarise(res, dF, np.array([1e-3, 1e-2]), 0.3)["buckles_for_every_dF_gt_0"] is False
+    res.outputs["buckled"][0] = True
+    assert sm._summarise(res, dF, np.array([1e-3, 1e-2]), 0.3)["buckles_for_every_dF_gt_0"] is True
