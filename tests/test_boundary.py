@@ -355,3 +355,18 @@ def test_departure_secant_recovers_from_overshoots(shape, most):
     r = bd.departure_secant(ev, 0.5, 4.0, 1e3, rtol=1e-6, max_iter=60)
     assert int(r.result) == 0 and float(r.root) == pytest.approx(1.0, rel=2e-6)
     assert int(r.evaluations) <= most
+
+
+def test_a_confirmed_departure_root_lies_in_a_label_bracket():
+    """A rate that vanishes faster than linearly at x* = 1 (u = (x − 1)², as the 3D rod's near
+    its root): from a buckled run at 1.03 the step u/λ (λ the rate bound) falls below rtol and
+    the plain search ends there, 3 % above the root (2 runs). With `confirm` a stable run just
+    below the lowest buckled point must hold it: the root then lies in a label bracket of
+    relative width rtol around x* (5 runs, measured)."""
+    ev = lambda x: (x > 1.0, jnp.where(x > 1.0, jnp.maximum(x - 1.0, 0.0) ** 2, jnp.nan))
+    kw = dict(start=1.03, rtol=1e-2, max_iter=40)
+    plain = bd.departure_secant(ev, 0.5, 4.0, 1e3, **kw)
+    assert int(plain.result) == 0 and float(plain.root) > 1.01  # converged, but off by more than rtol
+    held = bd.departure_secant(ev, 0.5, 4.0, 1e3, confirm=True, **kw)
+    lo, hi, root = float(held.lo), float(held.hi), float(held.root)
+    assert int(held.result) == 0 and lo <= 1.0 < hi and hi - lo <= 1e-2 * hi and lo <= root <= hi

@@ -148,6 +148,7 @@ def departure_secant(
     rtol: float = 1e-6,
     max_iter: int = 40,
     geometric: bool = True,
+    confirm: bool = False,
 ) -> RootResult:
     """The boundary x* in [`lo`, `hi`] from runs that stop as soon as their label is known:
     `evaluate(x)` returns `(buckled, u)` with u ≈ λ·(x − x*) > 0 for a buckled run (see
@@ -164,7 +165,10 @@ def departure_secant(
 
     `lo` and `hi` are trusted, not run (a stable `lo` is run only when the iteration ends next
     to it, so that a bracket without the root is reported); the first run is at `start`
-    (default `hi`), e.g. a prediction from a neighbouring root.
+    (default `hi`), e.g. a prediction from a neighbouring root. With `confirm`, a secant root is
+    accepted only once a stable run 0.9·`rtol`·|x₁| below the lowest buckled point x₁ holds it (a
+    buckled one there continues the secant): the result then lies in a label bracket of
+    relative width `rtol` (for a rate that is not linear so close to the root, as the 3D rod's).
 
     **Returns:** a [`jaxrod.boundary.RootResult`][] (`value`: u at x₁; `derivative`: the slope
     s used last; pure and vmappable).
@@ -215,10 +219,11 @@ def departure_secant(
         c, small, s = candidate(lo, hi, x1, u1, x2, u2, was_stable & ~buckled)
         narrow = (hi - lo) <= rtol * jnp.abs(hi)
         # ending next to an untested lower end: run it once, to tell a root from a bad bracket
-        check_lo = (narrow | small) & (lo <= lo_bound) & ~lo_run
-        finished = invalid | ((small | narrow) & ~check_lo)
+        unconfirmed = small & ~narrow if confirm else jnp.zeros_like(small)  # no stable run holds it yet
+        check_lo = (narrow | (small & ~unconfirmed if confirm else small)) & (lo <= lo_bound) & ~lo_run
+        finished = invalid | (((small & ~unconfirmed) | narrow) & ~check_lo)
         root = jnp.where(small, c, _mid(lo, hi, False))
-        x_next = jnp.where(check_lo, lo_bound, c)
+        x_next = jnp.where(check_lo, lo_bound, jnp.where(unconfirmed, x1 - 0.9 * rtol * jnp.abs(x1), c))
         return x_next, lo, hi, x1, u1, x2, u2, lo_run, n, finished, invalid, root, s, ~buckled
 
     inf = jnp.asarray(jnp.inf, dtype)
