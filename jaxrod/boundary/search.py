@@ -65,11 +65,10 @@ METHODS = ("departure", "bisection")
 def _method_of(method, model):
     """The search method: `"departure"` for the reduced models, label `"bisection"` by default
     for the 3D rod. Its departure rate (on the node positions, `Rod3D.translation`, tangents in
-    float64: `for_tangents`) is opt-in: u/(v₀ − v₀*) = 53–56 s⁻¹ at 12 segments, ΔF = 5 N, and
-    to rtol 1e-2 it takes 12 runs from [1e-4, 1] m/s (bisection 12) or 6 from the field
-    model's v₀* (bisection 10), the same root; at 60 segments 8 runs from the wide bracket,
-    inside bisection's bracket, but from the prediction it stops after 2 buckled runs 1.3 %
-    above that bracket (benchmarks/README.md, boundary_cost.py --rod3d)."""
+    float64: `for_tangents`; roots confirmed by a stable run, `departure_secant`) is opt-in:
+    u/(v₀ − v₀*) = 53–56 s⁻¹ at 12 segments, ΔF = 5 N; to rtol 1e-2 it takes 12 / 6 runs from
+    [1e-4, 1] m/s / from the field model's v₀* at 12 segments and 9 / 4 at 60 (bisection 12 /
+    10), inside bisection's bracket, but compiles longer (benchmarks/README.md, boundary_cost.py)."""
     if method is None:
         return "bisection" if model == "rod3d" else "departure"
     if method not in METHODS:
