@@ -68,7 +68,7 @@ GROUPS = {
     "rod3d": (["jaxrod/rod3d/energy.py", "jaxrod/rod3d/contact.py", "jaxrod/rod3d/model.py"],
               ["tests/test_rod3d.py", "tests/test_rod3d_contact.py", "tests/test_rod3d_rest.py",
                "tests/test_rod3d_loaded.py"]),
-    "boundary": (["jaxrod/boundary/*"], ["tests/test_boundary.py"]),
+    "boundary": (["jaxrod/boundary/*"], ["tests/test_boundary.py", "tests/test_roots.py"]),
     # the map's numbers on hand-built results and one 2 × 2 single-mode map; test_cli.py's
     # field-model map (sweeps, a boundary search and single scenes) takes a minute per mutant.
     # 802 mutants (most in plot_maps' labels, markers and limits): about 70-100 min with one job

@@ -1,0 +1,145 @@
+"""The root finders and searches of `jaxrod.boundary` on problems with known answers: safeguarded
+Newton, bisection and the departure secant on hand-made indicators, the indicators against
+exact or independent solutions, and the searches' settings (their own file, so that pytest-xdist
+can run them beside tests/test_boundary.py)."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod import boundary as bd
+from jaxrod import theory as th
+
+ROD = jr.RodChannel.reference(mu=0.3)
+
+
+def test_newton_without_a_slope_bisects_geometrically():
+    """Where g has no slope (a step), every safeguarded Newton iterate is the geometric midpoint
+    of the bracket: the iterates by hand, and the root to the tolerance."""
+    c = 0.3
+    res = bd.safeguarded_newton(lambda x: jnp.sign(x - c), 1e-3, 1.0, rtol=1e-6, max_iter=200)
+    lo, hi, n = 1e-3, 1.0, 0
+    while hi - lo > 1e-6 * hi:
+        x = math.sqrt(lo * hi)
+        lo, hi = (x, hi) if x < c else (lo, x)
+        n += 1
+    assert abs(float(res.root) - c) <= 2e-6 * c
+    assert abs(int(res.evaluations) - n) <= 2  # arithmetic midpoints would take about 20 more
+
+
+def test_rod_indicator_of_one_mode_is_the_exact_amplitude():
+    """g = log(max|θ(T)|/θ_c) of a single-mode scene against the exact solution at T."""
+    from jaxrod.models import SingleMode
+    from jaxrod.models.single_mode import exact_solution
+
+    scene = jr.scene.Scene(ROD, 5.0, jr.scene.make_perturbation("sine", 0.03), kind="mode")
+    m = SingleMode.from_rod(ROD, 6, F=scene.F)
+    q0, v0 = scene.initial_state()
+    A = exact_solution(q0, v0, m.k, m.f_s, m.f_d, 0.2)[0]
+    g = bd.rod_indicator(scene, 0.2)
+    assert float(g) == pytest.approx(math.log(abs(float(A)) / 0.5), abs=1e-3)
+
+
+def test_critical_load_without_sensitivities_runs_no_tangents(monkeypatch):
+    """`sensitivities=()`: no forward-mode run for them (the search's runs alone)."""
+    import jaxrod.boundary.search as search
+
+    def no(*a, **k):
+        raise AssertionError("departure_sensitivities called without sensitivities")
+
+    monkeypatch.setattr(search, "departure_sensitivities", no)
+    res, sens = bd.critical_load(ROD, 0.02, model="field", n=24, dt=jr.scene.Scene(ROD, 2.0, kind="field", n=24).step(),
+                                 bracket=(0.1, 20.0), rtol=1e-2, sensitivities=())
+    assert sens == {} and int(res.result) == 0
+
+
+def test_bisection_stops_at_its_tolerance():
+    """Bisection on a boolean label: one run per halving (in log x) until the bracket is within
+    rtol, the geometric midpoints by hand."""
+    c = 0.3
+    res = bd.bisection(lambda x: x > c, 1e-3, 1.0, rtol=1e-4, max_iter=200)
+    lo, hi, n = 1e-3, 1.0, 0
+    while hi - lo > 1e-4 * hi:
+        x = math.sqrt(lo * hi)
+        lo, hi = (lo, x) if x > c else (x, hi)
+        n += 1
+    assert float(res.lo) == pytest.approx(lo, rel=1e-12) and float(res.hi) == pytest.approx(hi, rel=1e-12)
+    assert abs(int(res.evaluations) - n) <= 2 and int(res.result) == 0
+
+
+def test_newton_starts_where_it_is_told():
+    """g = e^{8x} − e^{2.4} (root 0.3) on [0.1, 1]: Newton from `hi` creeps down the steep convex
+    side (12 evaluations, measured), from the geometric midpoint 0.316 it is next to the root
+    (7, the midpoint's own included)."""
+    g = lambda x: jnp.exp(8.0 * x) - math.exp(2.4)
+    from_hi = bd.safeguarded_newton(g, 0.1, 1.0, rtol=1e-10, start="hi")
+    from_mid = bd.safeguarded_newton(g, 0.1, 1.0, rtol=1e-10, start="mid")
+    assert float(from_hi.root) == pytest.approx(0.3, rel=1e-10) and float(from_mid.root) == pytest.approx(0.3, rel=1e-10)
+    assert int(from_hi.evaluations) > int(from_mid.evaluations) + 2
+
+
+def test_a_vmapped_curve_keeps_its_bracket():
+    """`boundary_curve` without continuation searches in the `bracket` it is given: one that
+    lies below every root is reported invalid at every load (single mode: Newton on the exact
+    solution)."""
+    r, _ = bd.boundary_curve(ROD, [2.0, 8.0], model="mode", bracket=(1e-4, 1e-3), sensitivities=())
+    assert np.all(np.asarray(r.result) == bd.ROOT_RESULTS.invalid_bracket)  # v₀* is 15-45 mm/s
+
+
+def test_smooth_indicator_against_an_independent_integration():
+    """x'' − x + tanh(x'/ε') = 0 (units x = A/a, τ = λt, ε' = ε/(λa)) from x = 0, x' = Ȧ₀/(aλ):
+    the indicator is x(horizon) − 1, here against SciPy's Radau at tight tolerances."""
+    from scipy.integrate import solve_ivp
+
+    k, f, eps, Ad0, T = -4.0, 6.0, 0.05, 3.5, 4.0  # a λ = 3: ε' = ε/(aλ), not ε·aλ
+    lam, a = math.sqrt(4.0), f / 4.0
+    e = eps / (a * lam)
+    sol = solve_ivp(lambda t, y: [y[1], y[0] - math.tanh(y[1] / e)], (0, T), [0.0, Ad0 / (a * lam)],
+                    method="Radau", rtol=1e-11, atol=1e-13)
+    g = bd.smooth_single_mode_indicator(jnp.asarray(Ad0), jnp.asarray(k), jnp.asarray(f), eps, horizon=T)
+    assert float(g) == pytest.approx(sol.y[0, -1] - 1.0, rel=1e-6, abs=1e-8)
+
+
+def test_critical_load_of_another_mode_is_its_p7():
+    """The single mode's ΔF* for mode 7 (above the critical mode's F⁰₆): P7 of mode 7."""
+    v0 = 15e-3
+    dF = float(th.critical_load_velocity(ROD, 7, v0 / ROD.R) - th.reference_load(ROD))
+    res, _ = bd.critical_load(ROD, v0, model="mode", mode=7, bracket=(dF / 3, 3 * dF), sensitivities=())
+    assert float(res.root) == pytest.approx(dF, rel=1e-6)
+
+
+def test_a_traced_load_without_n_and_dt_is_refused_by_name():
+    with pytest.raises(ValueError, match=r"^pass n and dt explicitly when the rod or the load is traced"):
+        jax.vmap(lambda dF: bd.critical_velocity(ROD, dF, model="field", sensitivities=())[0].root)(jnp.array([2.0, 4.0]))
+
+
+@pytest.mark.parametrize("shape, most", [("sqrt", 24), ("log", 16)])
+def test_departure_secant_recovers_from_overshoots(shape, most):
+    """A concave departure rate (u = √(x − 1) or log(1 + 50(x − 1)) above x* = 1): the secant
+    overshoots into the stable side and steps back up a fraction of the way, half of it after
+    two stable runs in a row. The root to rtol, in at most `most` runs (measured 23 and 15;
+    stepping back 1.5 of the way instead of 0.5 takes 29 and 20)."""
+    f = jnp.sqrt if shape == "sqrt" else (lambda d: jnp.log1p(50 * d))
+    ev = lambda x: (x > 1.0, jnp.where(x > 1.0, f(jnp.maximum(x - 1.0, 0.0)), jnp.nan))
+    r = bd.departure_secant(ev, 0.5, 4.0, 1e3, rtol=1e-6, max_iter=60)
+    assert int(r.result) == 0 and float(r.root) == pytest.approx(1.0, rel=2e-6)
+    assert int(r.evaluations) <= most
+
+
+def test_a_confirmed_departure_root_lies_in_a_label_bracket():
+    """A rate that vanishes faster than linearly at x* = 1 (u = (x − 1)², as the 3D rod's near
+    its root): from a buckled run at 1.03 the step u/λ (λ the rate bound) falls below rtol and
+    the plain search ends there, 3 % above the root (2 runs). With `confirm` a stable run just
+    below the lowest buckled point must hold it: the root then lies in a label bracket of
+    relative width rtol around x* (5 runs, measured)."""
+    ev = lambda x: (x > 1.0, jnp.where(x > 1.0, jnp.maximum(x - 1.0, 0.0) ** 2, jnp.nan))
+    kw = dict(start=1.03, rtol=1e-2, max_iter=40)
+    plain = bd.departure_secant(ev, 0.5, 4.0, 1e3, **kw)
+    assert int(plain.result) == 0 and float(plain.root) > 1.01  # converged, but off by more than rtol
+    held = bd.departure_secant(ev, 0.5, 4.0, 1e3, confirm=True, **kw)
+    lo, hi, root = float(held.lo), float(held.hi), float(held.root)
+    assert int(held.result) == 0 and lo <= 1.0 < hi and hi - lo <= 1e-2 * hi and lo <= root <= hi
