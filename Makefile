@@ -20,10 +20,10 @@ demo: $(STAMP)
 TEST_WORKERS ?= 2
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadfile
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist worksteal
 
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -m slow -n $(TEST_WORKERS) --dist loadfile
+	$(BIN)/python -m pytest -m slow -n $(TEST_WORKERS) --dist worksteal
 
 # Mutation testing (mutmut) of the physics and reporting modules against the default tests mapped
 # to each (tools/mutants.py): report in results/mutation/. GROUPS="theory friction" runs some.
