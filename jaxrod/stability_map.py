@@ -177,14 +177,18 @@ def _map_rows(results: dict) -> list[dict]:
     return rows
 
 
+# the figure's styling (sizes, widths, fonts, legend place) is reviewed on the figure: the
+# `pragma: no mutate` lines hold only styling, so that mutation testing (tools/mutants.py)
+# mutates what the figure shows (its data, labels and scales), which the tests check
+_FIT_STYLE = {"ls": "-", "color": "tab:blue", "lw": 1.5}  # pragma: no mutate
+_CURVE_STYLE = {"ls": "-", "color": "tab:purple", "lw": 2, "alpha": 0.8}  # pragma: no mutate
+
+
 def plot_maps(results: dict, summary: dict, path: str | None = None):
     """One panel per μ: stable (circles) / buckled (crosses), P6 theory, fitted boundary.
     **Returns:** the `matplotlib.figure.Figure`; also written as a PNG to `path` when given."""
 
     mus = list(results)
-    # the figure's styling (sizes, widths, fonts, legend place) is reviewed on the figure: the
-    # `pragma: no mutate` lines hold only styling, so that mutation testing (tools/mutants.py)
-    # mutates what the figure shows (its data, labels and scales), which the tests check
     size = (6.2 * len(mus), 5.0)  # pragma: no mutate
     fig, axes = subplots(1, len(mus), figsize=size, squeeze=False)
     dF = np.asarray(summary["dF"])
@@ -206,12 +210,12 @@ def plot_maps(results: dict, summary: dict, path: str | None = None):
             if len(s["boundary_dF"]) >= 2 and np.isfinite(s["exponent"]):
                 fit = s["prefactor"] * fine ** s["exponent"]
                 ax.plot(fine, 1e3 * fit, label=f"fitted boundary: v0 ∝ ΔF^({s['exponent']:.3f} ± {s['exponent_stderr']:.3f})",
-                        **dict(ls="-", color="tab:blue", lw=1.5))  # pragma: no mutate
+                        **_FIT_STYLE)
                 ax.plot(s["boundary_dF"], 1e3 * np.asarray(s["boundary_v0"]), "o", color="tab:blue", ms=3)
             if "curve_v0" in s:
                 cv = np.array([np.nan if x is None else x for x in s["curve_v0"]])
                 ax.plot(dF, 1e3 * cv, label=f"searched boundary (rtol {s['curve_rtol']:g}): v0* ∝ ΔF^({s['curve_exponent']:.3f})",
-                        **dict(ls="-", color="tab:purple", lw=2, alpha=0.8))  # pragma: no mutate
+                        **_CURVE_STYLE)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlim(dF.min() / 1.15, dF.max() * 1.15)

@@ -18,9 +18,8 @@ killed / (made − equivalent), and the diff of every survivor.
 A group whose every mutant would take hours on this CPU (each mutant compiles JAX functions for
 its tests) is run on a uniform random sample (`--sample K`, seed 0; by default the sizes in
 `SAMPLE`): the report then gives the sample's score with its 95 % Wilson interval, and the
-mutants left out as "not sampled". A
-sampled group interrupted (Ctrl-C) keeps the mutants it ran; those drawn but not reached count
-as not sampled (mutmut runs the drawn mutants in order of their tests' estimated time, so an
+mutants left out as "not sampled". A sampled group interrupted (Ctrl-C) keeps the mutants it
+ran; those drawn but not reached count as not sampled (mutmut runs the drawn mutants in order of their tests' estimated time, so an
 interrupted sample leans towards mutants covered by fewer or faster tests).
 """
 
@@ -71,7 +70,7 @@ GROUPS = {
     "boundary": (["jaxrod/boundary/*"], ["tests/test_boundary.py", "tests/test_roots.py"]),
     # the map's numbers on hand-built results and one 2 × 2 single-mode map; test_cli.py's
     # field-model map (sweeps, a boundary search and single scenes) takes a minute per mutant.
-    # 802 mutants (most in plot_maps' labels, markers and limits): about 70-100 min with one job
+    # 762 mutants (most in plot_maps' labels, markers and limits), sampled: 200 take about 20 min
     "stability_map": (["jaxrod/stability_map.py"], ["tests/test_mutants_stability_map.py"]),
     "sweeps_result": (["jaxrod/sweeps/result.py"], ["tests/test_sweep.py"]),
 }
@@ -123,7 +122,8 @@ def run_group(name: str, jobs: int, only: list[str] | None = None, earlier: dict
     mutmut = os.path.join(os.path.dirname(sys.executable), "mutmut")
     t0 = time.time()
     print(f"== {name}: mutating {', '.join(modules)} against {', '.join(tests)}", flush=True)
-    if sample is not None and only is None:
+    drawn = sample is not None and only is None
+    if drawn:
         # make the mutants and the test statistics (mutmut stops at the unknown name), then draw
         subprocess.run([mutmut, "run", "--max-children", str(jobs), "no-such-mutant"], cwd=work,
                        check=False, capture_output=True)
@@ -133,7 +133,7 @@ def run_group(name: str, jobs: int, only: list[str] | None = None, earlier: dict
         earlier = {"status": {k: "not sampled" for k in names}, "seconds": 0.0}
     subprocess.run([mutmut, "run", "--max-children", str(jobs), *(only or [])], cwd=work, check=False)
     status = _results(mutmut, work)
-    if sample is not None:  # drawn but not reached before an interrupt (Ctrl-C): left out of the sample
+    if drawn:  # drawn but not reached before an interrupt (Ctrl-C): left out of the sample
         status = {k: "not sampled" if v == "not checked" else v for k, v in status.items()}
     if only is not None and earlier is not None:
         status = {**earlier["status"], **{k: status.get(k, "not checked") for k in only}}

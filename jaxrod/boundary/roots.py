@@ -220,8 +220,9 @@ def departure_secant(
         narrow = (hi - lo) <= rtol * jnp.abs(hi)
         # ending next to an untested lower end: run it once, to tell a root from a bad bracket
         unconfirmed = small & ~narrow if confirm else jnp.zeros_like(small)  # no stable run holds it yet
-        check_lo = (narrow | (small & ~unconfirmed if confirm else small)) & (lo <= lo_bound) & ~lo_run
-        finished = invalid | (((small & ~unconfirmed) | narrow) & ~check_lo)
+        accepted = (small & ~unconfirmed) | narrow
+        check_lo = accepted & (lo <= lo_bound) & ~lo_run
+        finished = invalid | (accepted & ~check_lo)
         root = jnp.where(small, c, _mid(lo, hi, False))
         x_next = jnp.where(check_lo, lo_bound, jnp.where(unconfirmed, x1 - 0.9 * rtol * jnp.abs(x1), c))
         return x_next, lo, hi, x1, u1, x2, u2, lo_run, n, finished, invalid, root, s, ~buckled
