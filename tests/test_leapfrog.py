@@ -90,3 +90,43 @@ def test_a_rod_held_by_static_friction_does_not_move(scheme):
         moved = float(jnp.max(jnp.abs(sol.q - q0[None])))
         assert (moved == 0.0) == held, (share, moved)
         assert bool(sol.stuck[0]) == held
+
+
+@pytest.mark.parametrize("kind", ["field", "rod3d"])
+def test_the_velocity_pass_in_the_step_leaves_the_run_as_it_is(kind):
+    """A save interval ends with one more pass through the step, the velocity pass
+    (`ProjectedLeapfrog.velocity_in_step`: one copy of the friction pass to compile): it returns
+    the velocity at the position — a half kick and friction pass of h/2, computed here by hand —
+    and the run's state and bookkeeping bit for bit (a drift of 0, the forces recomputed from the
+    same inputs, no work counted)."""
+    rod = jr.RodChannel.reference(0.3)
+    scene = Scene(rod, 5.0, jr.SineVelocity(20e-3, 6.0), kind, n=24 if kind == "field" else 12)
+    model, q0, v0 = scene.model(), *scene.initial_state()
+    scheme = jr.ProjectedLeapfrog(scene.step())
+    opts = jr.RunOptions(stop_on_buckle=False, stop_when_stuck=False)
+    h = jnp.asarray(scene.step())
+
+    @jax.jit
+    def passes(q0, v0):
+        s = scheme.start(model, q0, v0, opts)
+
+        def body(i, c):  # 7 steps, then the pass, in one loop body as a run takes them
+            after, v_at = scheme._advance(model, c[0], h, 10, 5, opts, at_position=i == 7)
+            return after, v_at, c[0]
+
+        after, v_at, s = jax.lax.fori_loop(0, 8, body, (s, s.v, s))
+        v_trial = model.kick(s.q, s.v, s.a, 0.5 * h)  # velocity_at as it was written before
+        by_hand = model.friction_update(scheme.friction, v_trial, s.v, 0.5 * h, s.t, s.q, s.a)
+        return s, after, v_at, by_hand
+
+    s, after, v_at, by_hand = passes(q0, v0)
+    assert float(s.t) > 0 and int(s.steps) == 7
+    for old, new in zip(jax.tree_util.tree_leaves(s), jax.tree_util.tree_leaves(after)):
+        np.testing.assert_array_equal(np.asarray(new), np.asarray(old))
+    moved = False
+    for a, b, v in zip(jax.tree_util.tree_leaves(v_at), jax.tree_util.tree_leaves(by_hand),
+                       jax.tree_util.tree_leaves(s.v)):
+        b = np.asarray(b, float)  # to rounding of the leaf's largest entry (the sum's order may differ)
+        np.testing.assert_allclose(np.asarray(a, float), b, rtol=0, atol=1e-12 * max(np.max(np.abs(b)), 1e-300))
+        moved |= bool(np.any(np.asarray(a) != np.asarray(v)))
+    assert moved  # the pass changed the velocity: the comparison is not of two unchanged copies

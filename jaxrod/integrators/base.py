@@ -170,6 +170,12 @@ class AbstractFixedStep(AbstractIntegrator):
 
     dt: eqx.AbstractVar[float]
 
+    velocity_in_step = False
+    """Whether `step(..., h_save=, at_position=)` also computes `velocity_at` (a scheme that
+    carries a velocity other than the one at its positions): the run then ends each save
+    interval with one more pass through the step, the velocity pass, instead of compiling a
+    second copy of what `step` computes ([`jaxrod.ProjectedLeapfrog`][])."""
+
     def held_is_fixed(self, model: AbstractModel) -> bool:
         """Whether a state of `model` that passes the stick test is a fixed point of `step`
         (then a run is frozen at the step it sticks; otherwise at the next save)."""
@@ -215,9 +221,24 @@ class AbstractFixedStep(AbstractIntegrator):
         a constant load); at every `m`-th step a save. A finished run is left as it is:
         it takes a step of zero length (an exact identity of the scheme, and much cheaper than
         selecting between old and new arrays), and its bookkeeping is kept."""
+        return self._advance(model, s, h, m, n_save, options)[0]
+
+    def _advance(self, model, s: RunState, h, m: int, n_save: int, options: RunOptions, at_position=None):
+        """`advance`, and for a scheme whose `step` computes `velocity_at` (`velocity_in_step`),
+        where `at_position` is true the velocity pass instead of a step: the state and its
+        bookkeeping are left as they are. **Returns:** the state and the velocity at the position
+        (`None` without `at_position`)."""
         frozen = s.finished(n_save)
-        h = jnp.where(frozen, jnp.zeros_like(h), h)
-        q, v, a, (lost, work) = self.step(model, s.q, s.v, s.a, s.t, h)
+        h_run = jnp.where(frozen, jnp.zeros_like(h), h)
+        v_at = None
+        if at_position is None:
+            q, v, a, (lost, work) = self.step(model, s.q, s.v, s.a, s.t, h_run)
+        else:
+            frozen = frozen | at_position
+            h_run = jnp.where(at_position, jnp.zeros_like(h), h_run)
+            q, v, a, (lost, work), v_at = self.step(model, s.q, s.v, s.a, s.t, h_run, h_save=h,
+                                                    at_position=at_position)
+        h = h_run
         t = s.t + h
         amp, held = model.stop_measures(q, v, a, t)
         over = amp > options.threshold(model)
@@ -240,7 +261,7 @@ class AbstractFixedStep(AbstractIntegrator):
             steps=keep(s.steps, s.steps + 1), k=keep(s.k, jnp.where(at_save, 0, k)),
             saves=keep(s.saves, s.saves + at_save.astype(s.saves.dtype)),
             amp_max=keep(s.amp_max, jnp.where(at_save | stopped, jnp.maximum(s.amp_max, amp), s.amp_max)),
-        )
+        ), v_at
 
     def integrate(self, model, q0, v0, t1, n_save, options=RunOptions(), check_step_limit=True):
         s0 = self.start(model, q0, v0, options)
@@ -280,6 +301,8 @@ class AbstractFixedStep(AbstractIntegrator):
         h = self.save_step(t1, n_save)
 
         def interval(s):
+            if self.velocity_in_step:
+                return interval_with_velocity_pass(s)
             step = lambda s: self.advance(model, s, h, m, n_save, options)
             if options.early_exit:  # a stopped run leaves its interval at once, and skips the later ones
                 _, s = jax.lax.while_loop(
@@ -288,6 +311,21 @@ class AbstractFixedStep(AbstractIntegrator):
             else:
                 s = jax.lax.fori_loop(0, m, lambda _, s: step(s), s)
             v_at = self.velocity_at(model, s.q, s.v, s.a, s.t, h)
+            return (s, v_at), self.record(model, s, v_at, options)
+
+        def interval_with_velocity_pass(s):
+            # m steps, then one pass more through the step: the velocity pass (`velocity_in_step`)
+            def body(i, c):
+                return self._advance(model, c[0], h, m, n_save, options, at_position=i == m)
+
+            if options.early_exit:  # a stopped run goes to the velocity pass at once
+                def next_of(c):
+                    i, c = c[0], body(c[0], c[1:])
+                    return (jnp.where(i == m, m + 1, jnp.where(c[0].stopped, m, i + 1)),) + c
+
+                _, s, v_at = jax.lax.while_loop(lambda c: c[0] <= m, next_of, (jnp.where(s.stopped, m, 0), s, s.v))
+            else:
+                s, v_at = jax.lax.fori_loop(0, m + 1, body, (s, s.v))
             return (s, v_at), self.record(model, s, v_at, options)
 
         # the saves in a loop of known length: XLA compiles a loop over an unknown count (a
