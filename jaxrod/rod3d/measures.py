@@ -80,7 +80,8 @@ def observables(model, q, v, a) -> dict:
     every segment [N]; `height` largest height of the centre line above the channel bottom [m];
     `gap` largest distance of a node inside the clearance circle, R − r [m] (> 0 where the rod
     has lifted off the wall); `friction_residual` the relative residual of the last friction
-    pass (see `Rod3D.friction_tol`) and `friction_sweeps` the sweeps it took."""
+    pass (see `Rod3D.friction_tol`) and `friction_sweeps` the sweeps it took; `stuck_fraction`
+    the fraction of the nodes held by static friction in that pass."""
     x = q.x
     return dict(
         theta=model.theta(x),
@@ -92,4 +93,5 @@ def observables(model, q, v, a) -> dict:
         gap=jnp.max(-model.penetration(x)[0]) if model.channel else jnp.zeros((), x.dtype),
         friction_residual=v.residual,
         friction_sweeps=v.sweeps,
+        stuck_fraction=jnp.mean(v.stuck.astype(x.dtype)),
     )

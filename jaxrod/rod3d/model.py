@@ -54,6 +54,8 @@ class Rod3D(AbstractModel):
       and pushed by the constant force `end_load`, as in the reduced models) or
       `"displacement"` (node 0 held, node n pushed along −x at `speed`, E1) (static).
     - `end_load`: the dead load [N] for `control="load"`.
+    - `load_rate`: with `control="load"`, the load's rise [N/s] from `end_load` at t = 0 (static,
+      default 0; a rising load is never frozen as stuck; the energy balance omits its work).
     - `preload`: for `control="force"`, the uniform compressive force [N] at which the straight
       rod's ends are held (the default `F` of `initial_state` and `perturbed_state`); it sets
       the buckling threshold (see `buckle_threshold`).
@@ -97,6 +99,7 @@ class Rod3D(AbstractModel):
     friction_precision: str = eqx.field(static=True)
     speed: Float[Array, ""]
     end_load: Float[Array, ""]
+    load_rate: float = eqx.field(static=True)
     preload: Float[Array, ""]
     contact_stiffness: Float[Array, ""]
     contact_damping: Float[Array, ""]
@@ -115,6 +118,7 @@ class Rod3D(AbstractModel):
         control: str = "force",
         speed: ArrayLike = 0.0,
         end_load: ArrayLike = 0.0,
+        load_rate: float = 0.0,
         preload: ArrayLike = 0.0,
         contact_stiffness: ArrayLike | None = None,
         contact_damping: ArrayLike = 0.0,
@@ -137,6 +141,7 @@ class Rod3D(AbstractModel):
         self.gravity = bool(gravity)
         self.speed = float_leaf(speed)
         self.end_load = float_leaf(end_load)
+        self.load_rate = float(load_rate)
         self.preload = float_leaf(preload)
         l0 = rod.L / n_segments
         if contact_stiffness is None:
@@ -160,14 +165,9 @@ class Rod3D(AbstractModel):
         check_arguments(self)
 
     # -- discretisation --------------------------------------------------------------------
-    @property
-    def n(self) -> int:
-        return self.n_segments
+    n = property(lambda self: self.n_segments)
 
-    @property
-    def l0(self):
-        """Reference segment length l̂ = L/n [m]."""
-        return self.rod.L / self.n
+    l0 = property(lambda self: self.rod.L / self.n, doc="Reference segment length l̂ = L/n [m].")
 
     @property
     def voronoi(self) -> Float[Array, " n1"]:
@@ -175,9 +175,7 @@ class Rod3D(AbstractModel):
         w = jnp.ones(self.n + 1).at[0].set(0.5).at[-1].set(0.5)
         return w * self.l0
 
-    @property
-    def mass(self) -> Float[Array, " n1"]:
-        return self.rod.rho * self.voronoi
+    mass = property(lambda self: self.rod.rho * self.voronoi)
 
     @property
     def inertia(self) -> Float[Array, "3"]:
@@ -185,10 +183,7 @@ class Rod3D(AbstractModel):
         I = self.rod.I
         return self.rod.rho_v * self.l0 * jnp.stack([self.rotary_scale * I, self.rotary_scale * I, 2.0 * I])
 
-    @property
-    def g_vec(self):
-        g = self.rod.g if self.gravity else 0.0 * self.rod.g
-        return jnp.stack([0.0 * g, 0.0 * g, -g])
+    g_vec = property(lambda self: jnp.stack([0.0, 0.0, -1.0]) * (self.rod.g if self.gravity else 0.0 * self.rod.g))
 
     def held(self) -> tuple[Bool[Array, "n1 3"], Bool[Array, "n 3"]]:
         """Node velocity components prescribed, segment spins held at zero (`state.held_pattern`)."""
@@ -244,6 +239,8 @@ class Rod3D(AbstractModel):
         """Forces, torques and wall forces at `q` with velocities `v` (contact and viscous
         damping depend on them), and the friction pass's fields there (`friction_table`)."""
         f, tau, N, fd = self.forces(q.x, q.Q, v.v)
+        if self.load_rate and t is not None:  # the rise of the dead load (`load_rate`)
+            f = f.at[-1, 0].add(-self.load_rate * t)
         return Rod3DForces(f, tau, N, fd, friction_table(self, q.x, q.Q, N))
 
     def kick(self, q, v: Rod3DVelocity, a: Rod3DForces, h) -> Rod3DVelocity:
@@ -299,7 +296,7 @@ class Rod3D(AbstractModel):
 
     @property
     def autonomous(self) -> bool:
-        return self.control != "displacement"
+        return self.control != "displacement" and not self.load_rate
 
     @property
     def buckle_threshold(self) -> Float[Array, ""]:

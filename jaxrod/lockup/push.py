@@ -1,0 +1,166 @@
+r"""The lock-up scene with the 3D rod: a rod pushed into a long horizontal channel by a slowly
+rising entry force, its far end held against a load cell (docs/physics.md §8, issue [lockup]).
+
+A case is dimensionless (P8): μL/ℓ and r/ℓ, with ℓ = √(EI/(r w)) and F₀ = √(EI w/r).
+[`push_rod`][jaxrod.lockup.push.push_rod] makes the rod and channel that realize it from a
+material (its d, E, ρ_v, ν and g; default the reference rod's nitinol): EI and the weight per
+length w do not depend on r or L, so r = (ρ² EI/w)^{1/3} for ρ = r/ℓ, then ℓ = r/ρ and
+L = (μL/ℓ) ℓ/μ. Two materials with the same μL/ℓ and r/ℓ are the same case in these units.
+
+[`push`][jaxrod.lockup.push.push] runs [`jaxrod.rod3d.Rod3D`][]: the far end (node 0) held in
+place, its axial support force the load cell's reading; the entry end (node n) guided on the
+channel bottom and pushed along the rod by a dead load that rises at a set rate (then, to
+unload, falls at it). The rod starts straight on the bottom, unloaded, with a small random
+lateral offset (`imperfection`·r, smooth: the first sine modes of the rod with random signs) so
+that buckling starts near its onset rather than from rounding. Each save records the entry and
+far-end forces, the push, the wall force per length, the stuck fraction of the contacts and
+the helical and sinusoidal extents (`extents`).
+
+Layer: beside [`jaxrod.scene`][] (it builds and runs the 3D rod); `jaxrod.lockup`'s closed
+forms do not import it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..integrators import default_for
+from ..integrators.base import RunOptions
+from ..params import RodChannel
+from ..rod3d import Rod3D, step_limit
+from ..simulate import simulate
+from .closed_forms import force_unit, length_unit
+
+__all__ = ["push_rod", "push_model", "push", "extents", "SEGMENTS_PER_WAVE"]
+
+SEGMENTS_PER_WAVE = 16
+"""Default resolution: segments per buckle wavelength at the sinusoidal onset, 2π√(ℓr) (§3)."""
+
+
+def _check(name, value, lo, closed, unit=""):
+    v = float(value)
+    ok = math.isfinite(v) and (v >= lo if closed else v > lo)
+    if not ok:
+        raise ValueError(f"{name} = {value!r}{unit} is invalid: expected a finite number {'>=' if closed else '>'} {lo:g}.")
+    return v
+
+
+def push_rod(mu_L_over_ell, r_over_ell, mu, material: RodChannel | None = None) -> RodChannel:
+    """The rod and channel of the case μL/ℓ = `mu_L_over_ell`, r/ℓ = `r_over_ell` at the friction
+    coefficient `mu` (static = dynamic) from `material` (its d, E, ρ_v, ν, g; default
+    `RodChannel.reference()`): clearance r = (ρ² EI/w)^{1/3} [m], length L = (μL/ℓ)·ℓ/μ [m].
+
+    **Raises:** `ValueError` naming the argument unless μL/ℓ > 0, 0 < r/ℓ < 0.5 and μ > 0."""
+    X = _check("mu_L_over_ell", mu_L_over_ell, 0.0, False)
+    rho = _check("r_over_ell", r_over_ell, 0.0, False)
+    if rho >= 0.5:
+        raise ValueError(f"r_over_ell = {r_over_ell!r} is invalid: expected 0 < r/ell < 0.5 (a slender helix).")
+    mu = _check("mu", mu, 0.0, False)
+    m = RodChannel.reference() if material is None else material
+    EI, w = float(m.EI), float(m.rho * m.g)
+    r = (rho**2 * EI / w) ** (1.0 / 3.0)
+    ell = r / rho
+    return RodChannel(L=X * ell / mu, d=m.d, E=m.E, rho_v=m.rho_v, nu=m.nu, R=r, g=m.g, mu_s=mu, mu_d=mu)
+
+
+def units(rod: RodChannel) -> tuple[float, float]:
+    """(F₀ [N], ℓ [m]) of `rod` (P8)."""
+    w = rod.rho * rod.g
+    return float(force_unit(rod.EI, w, rod.R)), float(length_unit(rod.EI, w, rod.R))
+
+
+def push_model(rod: RodChannel, n: int | None = None, F_in: float = 0.0, rate: float = 0.0, **rod3d) -> Rod3D:
+    """The 3D rod of the scene: `n` segments (default `SEGMENTS_PER_WAVE` per buckle wavelength
+    at the sinusoidal onset, at least 20), pinned ends, the far end (node 0) held and the entry
+    (node n) guided on the channel bottom, free along the rod and pushed by the dead load `F_in`
+    [N] rising at `rate` [N/s]; other keywords go to [`jaxrod.rod3d.Rod3D`][]."""
+    if n is None:
+        _, ell = units(rod)
+        wave = 2 * math.pi * math.sqrt(ell * float(rod.R))
+        n = max(20, math.ceil(SEGMENTS_PER_WAVE * float(rod.L) / wave))
+    return Rod3D(rod, int(n), control="load", end_load=F_in, load_rate=rate, ends="pinned", **rod3d)
+
+
+def _imperfection(model: Rod3D, amplitude, key, modes: int = 8):
+    """A smooth random lateral offset [m] at the nodes: Σ_k c_k sin(kπs/L), k = 1…`modes`, c_k
+    uniform in ±1, scaled so that its largest value is `amplitude`."""
+    s = np.arange(model.n + 1) / model.n
+    c = np.asarray(jax.random.uniform(key, (modes,), minval=-1.0, maxval=1.0))
+    y = sum(c[k] * np.sin((k + 1) * np.pi * s) for k in range(modes))
+    return amplitude * y / max(np.max(np.abs(y)), 1e-300)
+
+
+def extents(theta, s, wave):
+    """The helical and sinusoidal lengths [m] of the rod at each save: a node is helical where
+    the angle θ on the wall (unwrapped along the rod) spans more than π within one buckle
+    wavelength `wave` [m] around it (a helix turns once in less than that; a sinusoid of
+    amplitude below π/2 spans less), sinusoidal where it spans more than 0.2 rad but not π; a
+    section's end next to a straight part is blurred by up to half the window, and a helix's
+    last half wavelength (less than π of turn) reads as sinusoidal.
+    `theta` (..., n + 1) [rad], `s` (n + 1,) node positions along the rod [m]."""
+    th = np.unwrap(np.asarray(theta), axis=-1)
+    ds = float(np.mean(np.diff(s)))
+    half = max(1, int(round(0.5 * wave / ds)))
+    pad = np.pad(th, [(0, 0)] * (th.ndim - 1) + [(half, half)], mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(pad, 2 * half + 1, axis=-1)
+    span = windows.max(-1) - windows.min(-1)
+    helical = span > np.pi
+    sinusoidal = (span > 0.2) & ~helical
+    return helical.sum(-1) * ds, sinusoidal.sum(-1) * ds
+
+
+def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: int | None = None,
+         n_save: int = 101, imperfection: float = 1e-3, key=None, dt_fraction: float = 0.3,
+         progress: bool = False) -> dict:
+    """Push the rod into the channel: the entry force rises from 0 to `F_max` [N] at `rate`
+    [N/s] (a dead load on the entry, `Rod3D.load_rate`), then, with `unload`, falls back to 0 at
+    the same rate. The step is `dt_fraction` × the explicit limit at the straight rod (the
+    wall's Hertz contact stiffens as the wall force grows: 0.3 leaves room for many w).
+
+    Force and not a set pushing speed: the rod is axially stiff (EA/F₀ ≈ 6·10⁵ for the reference
+    material at r/ℓ = 0.02), so a push at mm/s raises the entry force by hundreds of F₀ per
+    second before the rod can buckle (measured: μL/ℓ = 1, 5 mm/s: the state non-finite within
+    0.4 s, the rod whipping round the channel), and quasi-static pushing would need ≲ 0.1 mm/s;
+    a load raised in steps leaves the friction wherever the step's overshoot put it (measured:
+    (F_in − F_far)/μwL between 0 and 0.33 after steps of F₀/2 on a short rod, against 0.95
+    under a ramp).
+
+    **Returns:** a dict of NumPy arrays over the saves (`n_save` per phase; the unloading
+    phase's first save dropped): `t` [s], `F_in` the load [N], `push` the entry's displacement
+    into the channel [m], `F_far` the far end's axial support force (the load cell) [N], `f_in`,
+    `f_far` in units of F₀, `u` (saves, n + 1) every node's displacement along the channel
+    toward the far end [m], `helical`, `sinusoidal` extents [m] (`extents`), `wall_force`
+    (saves, n + 1) [N/m], `stuck_fraction`, `theta` (saves, n + 1) [rad], `unloading` (bool);
+    and the scalars `F0`, `ell`, `n`, `dt`, `result` (the worse [`jaxrod.RESULTS`][] code)."""
+    F0, ell = units(rod)
+    key = jax.random.key(0) if key is None else key
+    F_max, rate = _check("F_max", F_max, 0.0, False, " N"), _check("rate", rate, 0.0, False, " N/s")
+    model = push_model(rod, n)
+    offset = _imperfection(model, imperfection * float(rod.R), key)
+    q, v = model.initial_state(0.0, lateral_offset=jnp.asarray(offset))
+    x0 = np.asarray(q.x[:, 0])
+    dt = dt_fraction * float(step_limit(model, q))
+    opts = RunOptions(stop_on_buckle=False, stop_when_stuck=False, save_state=True, progress=progress)
+    parts, result = [], 0
+    for k, (start, r) in enumerate([(0.0, rate)] + ([(F_max, -rate)] if unload else [])):
+        phase = push_model(rod, model.n, F_in=start, rate=r)
+        sol = simulate(phase, default_for(phase, dt), q, v, F_max / rate, n_save=n_save, options=opts, throw=False)
+        q, v = sol.q_final, sol.v_final
+        ts = np.asarray(sol.ts)
+        obs = {name: np.asarray(a) for name, a in sol.observables.items()}
+        sl = slice(0 if k == 0 else 1, None)
+        parts.append(dict(t=k * F_max / rate + ts[sl], F_in=(start + r * ts)[sl], F_far=obs["reaction"][sl, 0], wall_force=obs["normal_force"][sl], theta=obs["theta"][sl],
+                          stuck_fraction=obs["stuck_fraction"][sl], unloading=np.full(len(ts[sl]), k == 1),
+                          u=x0 - np.asarray(sol.q.x[..., 0])[sl]))
+        result = max(result, int(sol.result))
+    rec = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
+    s_nodes = np.arange(model.n + 1) * (float(rod.L) / model.n)
+    helical, sinusoidal = extents(rec["theta"], s_nodes, 2 * math.pi * math.sqrt(ell * float(rod.R)))
+    return dict(t=rec["t"], F_in=rec["F_in"], push=rec["u"][:, -1], u=rec["u"], F_far=rec["F_far"], f_in=rec["F_in"] / F0,
+                f_far=rec["F_far"] / F0, helical=helical, sinusoidal=sinusoidal, wall_force=rec["wall_force"],
+                stuck_fraction=rec["stuck_fraction"], theta=rec["theta"], unloading=rec["unloading"], F0=F0, ell=ell,
+                n=model.n, dt=dt, result=result)

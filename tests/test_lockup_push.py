@@ -1,0 +1,86 @@
+"""The lock-up scene with the 3D rod (`jaxrod.lockup.push`): the case it builds, and the soft-string
+law of a straight rod pushed by a slowly rising entry force — the force that reaches the far end
+is the pushed force less the friction μwL of the sliding rod, and beyond the point where that
+friction has taken all of it the rod does not move."""
+
+import math
+
+import jax
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod.lockup.push import extents, push, push_rod, units
+
+jax.config.update("jax_enable_x64", True)
+
+
+def test_the_rod_realizes_the_dimensionless_case_for_any_material():
+    """μL/ℓ and r/ℓ of the rod made for a case are the case's, for the reference nitinol and for
+    a heavier, softer material (the same case in units of F₀ and ℓ, other SI numbers)."""
+    other = jr.RodChannel.reference().__class__(L=1.0, d=3e-3, E=2e9, rho_v=1200.0, nu=0.4, R=0.01, g=9.81,
+                                                 mu_s=0.3, mu_d=0.3)
+    for material in (None, other):
+        rod = push_rod(2.5, 0.02, 0.4, material)
+        F0, ell = units(rod)
+        w = float(rod.rho * rod.g)
+        assert math.isclose(ell, math.sqrt(float(rod.EI) / (float(rod.R) * w)), rel_tol=1e-12)
+        assert math.isclose(F0, math.sqrt(float(rod.EI) * w / float(rod.R)), rel_tol=1e-12)
+        assert math.isclose(0.4 * float(rod.L) / ell, 2.5, rel_tol=1e-12)
+        assert math.isclose(float(rod.R) / ell, 0.02, rel_tol=1e-12)
+        assert float(rod.mu_s) == float(rod.mu_d) == 0.4
+    assert not math.isclose(float(push_rod(2.5, 0.02, 0.4).R), float(push_rod(2.5, 0.02, 0.4, other).R))
+
+
+@pytest.mark.parametrize("args, name", [((0.0, 0.02, 0.5), "mu_L_over_ell"), ((1.0, 0.7, 0.5), "r_over_ell"),
+                                        ((1.0, 0.02, -1.0), "mu"), ((float("nan"), 0.02, 0.5), "mu_L_over_ell")])
+def test_a_case_out_of_range_is_refused_by_name(args, name):
+    with pytest.raises(ValueError, match=name):
+        push_rod(*args)
+
+
+def test_extents_tell_a_helix_from_a_sinusoid():
+    """A helix on the first 4 m, straight, then a sinusoid of 0.6 rad on 6–9 m: the extents are
+    4 m and 3 m, each blurred by the window: half a wavelength at each end that meets a straight
+    part, and the helix's last half wavelength, which turns less than π, also reads as sinusoidal
+    (measured: 4.5 m and 4.25 m)."""
+    s = np.linspace(0.0, 10.0, 401)
+    wave = 1.0
+    helix = np.where(s < 4.0, 2 * np.pi * s / 0.8, 0.0)  # five turns, one every 0.8 m
+    sine = np.where((s > 6.0) & (s < 9.0), 0.6 * np.sin(2 * np.pi * (s - 6.0) / wave), 0.0)
+    theta = np.angle(np.exp(1j * (helix + sine)))  # wrapped, as the rod's θ is
+    hel, sin = extents(theta[None], s, wave)
+    ds = s[1] - s[0]
+    assert 4.0 - ds <= hel[0] <= 4.0 + 0.5 * wave + ds
+    assert 3.0 - ds <= sin[0] <= 3.0 + 1.5 * wave + ds
+
+
+def test_a_short_rod_passes_the_pushed_force_less_the_friction_of_the_rod():
+    """μL/ℓ = 0.1 (L = 0.41 m, far shorter than a buckle: it stays straight up to 3F₀): under an
+    entry force rising at 15 F₀/s every interior node slides toward the far end, so the load
+    cell reads F_in − μ_d w L (n − ½)/n (the held far node's half segment carries no friction,
+    the entry node's half does). Measured: 0.971 of μwL at n = 20 against (n − ½)/n = 0.975."""
+    rod = push_rod(0.1, 0.02, 0.5)
+    F0, _ = units(rod)
+    r = push(rod, 3.0 * F0, 15.0 * F0, unload=False, n_save=21)
+    assert r["result"] == 0 and r["n"] == 20
+    muwL = 0.5 * float(rod.rho * rod.g) * float(rod.L)
+    lost = (r["F_in"] - r["F_far"])[-5:] / muwL
+    np.testing.assert_allclose(lost, (r["n"] - 0.5) / r["n"], atol=0.01)
+    assert np.all(r["helical"] == 0) and np.all(r["sinusoidal"] == 0)
+
+
+def test_past_the_force_front_a_straight_rod_does_not_move():
+    """μL/ℓ = 2 (L = 8.2 m) pushed up to 1.5 F₀, below the sinusoidal onset: friction takes the
+    whole force within μs/ℓ = 1.5, so the far quarter of the rod carries none of it. Static
+    friction holds it exactly (a held degree of freedom has zero velocity in the projected
+    scheme): its nodes stay within the initial settling of the straight state (1e-9 m, far
+    below the entry's push) and the load cell reads what it read at the start."""
+    rod = push_rod(2.0, 0.02, 0.5)
+    F0, ell = units(rod)
+    r = push(rod, 1.5 * F0, 15.0 * F0, unload=False, n_save=21)
+    assert r["result"] == 0
+    far = slice(0, r["n"] // 4)  # node 0 is the far end
+    assert r["push"][-1] > 1e-6
+    assert np.max(np.abs(r["u"][:, far])) < 1e-9
+    assert np.max(np.abs(r["F_far"] - r["F_far"][0])) < 1e-3 * F0
