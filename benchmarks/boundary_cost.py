@@ -19,7 +19,7 @@ this machine side by side in one process, wall times after compilation (best of 
 Writes `benchmarks/results/boundary_cost.csv` (plain numbers).
 
     python benchmarks/boundary_cost.py [--skip-e4]
-    python benchmarks/boundary_cost.py --rod3d 12 60
+    python benchmarks/boundary_cost.py --rod3d 12 60 120  # rows of other segment counts are kept
 """
 
 from __future__ import annotations
@@ -150,7 +150,13 @@ def rod3d(segments):
                       f"v0* = {1e3 * float(r.root):.3f} mm/s in [{1e3 * float(r.lo):.3f}, {1e3 * float(r.hi):.3f}], "
                       f"{dt:.1f} s" + (" (with the method's compilation)" if name == "wide" else ""), flush=True)
     os.makedirs(OUT, exist_ok=True)
-    write_csv(os.path.join(OUT, "boundary_cost_rod3d.csv"), rows)
+    path = os.path.join(OUT, "boundary_cost_rod3d.csv")
+    if os.path.exists(path):  # the rows of other segment counts are kept
+        import csv
+
+        with open(path) as fh:
+            rows = [r for r in csv.DictReader(fh) if int(r["segments"]) not in segments] + rows
+    write_csv(path, sorted(rows, key=lambda r: int(r["segments"])))
 
 
 def main():
