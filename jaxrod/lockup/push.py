@@ -35,7 +35,7 @@ from ..rod3d import Rod3D, step_limit
 from ..simulate import simulate
 from .closed_forms import force_unit, length_unit
 
-__all__ = ["push_rod", "push_model", "push", "extents", "SEGMENTS_PER_WAVE"]
+__all__ = ["push_rod", "push_model", "push", "inject", "extents", "units", "SEGMENTS_PER_WAVE"]
 
 SEGMENTS_PER_WAVE = 16
 """Default resolution: segments per buckle wavelength at the sinusoidal onset, 2π√(ℓr) (§3)."""
@@ -113,54 +113,100 @@ def extents(theta, s, wave):
     return helical.sum(-1) * ds, sinusoidal.sum(-1) * ds
 
 
-def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: int | None = None,
-         n_save: int = 101, imperfection: float = 1e-3, key=None, dt_fraction: float = 0.3,
-         progress: bool = False) -> dict:
-    """Push the rod into the channel: the entry force rises from 0 to `F_max` [N] at `rate`
-    [N/s] (a dead load on the entry, `Rod3D.load_rate`), then, with `unload`, falls back to 0 at
-    the same rate. The step is `dt_fraction` × the explicit limit at the straight rod (the
-    wall's Hertz contact stiffens as the wall force grows: 0.3 leaves room for many w).
+def _rod3d_options(rod3d: dict) -> dict:
+    """The scene's `Rod3D` keywords: a float64 friction pass unless asked otherwise (in float32
+    the state of a rod climbing the wall became non-finite, measured at μL/ℓ = 1, F_far = 2.5 F₀,
+    θ ≈ 1 rad, with steps of 0.3 and 0.1 of the limit; in float64 the same run forms its helix)."""
+    return {"friction_precision": "float64", **rod3d}
 
-    Force and not a set pushing speed: the rod is axially stiff (EA/F₀ ≈ 6·10⁵ for the reference
-    material at r/ℓ = 0.02), so a push at mm/s raises the entry force by hundreds of F₀ per
-    second before the rod can buckle (measured: μL/ℓ = 1, 5 mm/s: the state non-finite within
-    0.4 s, the rod whipping round the channel), and quasi-static pushing would need ≲ 0.1 mm/s;
-    a load raised in steps leaves the friction wherever the step's overshoot put it (measured:
-    (F_in − F_far)/μwL between 0 and 0.33 after steps of F₀/2 on a short rod, against 0.95
-    under a ramp).
 
-    **Returns:** a dict of NumPy arrays over the saves (`n_save` per phase; the unloading
-    phase's first save dropped): `t` [s], `F_in` the load [N], `push` the entry's displacement
-    into the channel [m], `F_far` the far end's axial support force (the load cell) [N], `f_in`,
-    `f_far` in units of F₀, `u` (saves, n + 1) every node's displacement along the channel
-    toward the far end [m], `helical`, `sinusoidal` extents [m] (`extents`), `wall_force`
-    (saves, n + 1) [N/m], `stuck_fraction`, `theta` (saves, n + 1) [rad], `unloading` (bool);
-    and the scalars `F0`, `ell`, `n`, `dt`, `result` (the worse [`jaxrod.RESULTS`][] code)."""
-    F0, ell = units(rod)
+def _start(rod, n, imperfection, key, dt_fraction, rod3d):
+    """The scene's rod, its straight imperfect start and the step."""
+    model = push_model(rod, n, **rod3d)
     key = jax.random.key(0) if key is None else key
-    F_max, rate = _check("F_max", F_max, 0.0, False, " N"), _check("rate", rate, 0.0, False, " N/s")
-    model = push_model(rod, n)
     offset = _imperfection(model, imperfection * float(rod.R), key)
     q, v = model.initial_state(0.0, lateral_offset=jnp.asarray(offset))
+    return model.n, q, v, dt_fraction * float(step_limit(model, q))
+
+
+def _phases(rod, phases, q, v, dt, n_save, progress):
+    """Run `phases` — (model, duration [s]) in turn, each from where the last left the rod — and
+    record what the scene reports (each phase's first save dropped after the first)."""
+    F0, ell = units(rod)
     x0 = np.asarray(q.x[:, 0])
-    dt = dt_fraction * float(step_limit(model, q))
     opts = RunOptions(stop_on_buckle=False, stop_when_stuck=False, save_state=True, progress=progress)
-    parts, result = [], 0
-    for k, (start, r) in enumerate([(0.0, rate)] + ([(F_max, -rate)] if unload else [])):
-        phase = push_model(rod, model.n, F_in=start, rate=r)
-        sol = simulate(phase, default_for(phase, dt), q, v, F_max / rate, n_save=n_save, options=opts, throw=False)
+    parts, result, t0 = [], 0, 0.0
+    for k, (model, duration) in enumerate(phases):
+        sol = simulate(model, default_for(model, dt), q, v, duration, n_save=n_save, options=opts, throw=False)
         q, v = sol.q_final, sol.v_final
         ts = np.asarray(sol.ts)
         obs = {name: np.asarray(a) for name, a in sol.observables.items()}
         sl = slice(0 if k == 0 else 1, None)
-        parts.append(dict(t=k * F_max / rate + ts[sl], F_in=(start + r * ts)[sl], F_far=obs["reaction"][sl, 0], wall_force=obs["normal_force"][sl], theta=obs["theta"][sl],
-                          stuck_fraction=obs["stuck_fraction"][sl], unloading=np.full(len(ts[sl]), k == 1),
-                          u=x0 - np.asarray(sol.q.x[..., 0])[sl]))
+        parts.append(dict(t=t0 + ts[sl], phase=np.full(len(ts[sl]), k), reaction=obs["reaction"][sl],
+                          ts=ts[sl], wall_force=obs["normal_force"][sl], theta=obs["theta"][sl],
+                          stuck_fraction=obs["stuck_fraction"][sl], u=x0 - np.asarray(sol.q.x[..., 0])[sl]))
+        t0 += duration
         result = max(result, int(sol.result))
     rec = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
-    s_nodes = np.arange(model.n + 1) * (float(rod.L) / model.n)
-    helical, sinusoidal = extents(rec["theta"], s_nodes, 2 * math.pi * math.sqrt(ell * float(rod.R)))
-    return dict(t=rec["t"], F_in=rec["F_in"], push=rec["u"][:, -1], u=rec["u"], F_far=rec["F_far"], f_in=rec["F_in"] / F0,
-                f_far=rec["F_far"] / F0, helical=helical, sinusoidal=sinusoidal, wall_force=rec["wall_force"],
-                stuck_fraction=rec["stuck_fraction"], theta=rec["theta"], unloading=rec["unloading"], F0=F0, ell=ell,
-                n=model.n, dt=dt, result=result)
+    s_nodes = np.arange(q.x.shape[0]) * (float(rod.L) / (q.x.shape[0] - 1))
+    rec["helical"], rec["sinusoidal"] = extents(rec["theta"], s_nodes, 2 * math.pi * math.sqrt(ell * float(rod.R)))
+    rec.update(push=rec["u"][:, -1], F0=F0, ell=ell, n=q.x.shape[0] - 1, dt=dt, result=result)
+    return rec
+
+
+def _forces(rec, F_in, F_far):
+    rec.update(F_in=F_in, F_far=F_far, f_in=F_in / rec["F0"], f_far=F_far / rec["F0"])
+    return rec
+
+
+def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: int | None = None,
+         n_save: int = 101, imperfection: float = 1e-3, key=None, dt_fraction: float = 0.3,
+         progress: bool = False, **rod3d) -> dict:
+    """Push the rod, its far end held against the load cell: the entry force rises from 0 to
+    `F_max` [N] at `rate` [N/s] (a dead load on the entry, `Rod3D.load_rate`), then, with
+    `unload`, falls back to 0 at the same rate. The step is `dt_fraction` × the explicit limit at
+    the straight rod (the wall's Hertz contact stiffens as the wall force grows: 0.3 leaves room
+    for many w). Other keywords go to every [`jaxrod.rod3d.Rod3D`][] of the run (default here: a
+    float64 friction pass, `_rod3d_options`).
+
+    Force and not a set pushing speed against a held far end: the rod is axially stiff (EA/F₀ ≈
+    6·10⁵ for the reference material at r/ℓ = 0.02), so a push at mm/s raises the entry force by
+    hundreds of F₀ per second before the rod can buckle (measured: μL/ℓ = 1, 5 mm/s: the state
+    non-finite within 0.4 s, the rod whipping round the channel); a load raised in steps leaves
+    the friction wherever the step's overshoot put it (measured: (F_in − F_far)/μwL between 0 and
+    0.33 after steps of F₀/2 on a short rod, against 0.97 under a ramp). With its far end held the
+    rod slides only as far as it is compressed: see `inject` for a rod that slides.
+
+    **Returns:** a dict of NumPy arrays over the saves (`n_save` per phase; the unloading
+    phase's first save dropped): `t` [s], `phase` (0 loading, 1 unloading), `F_in` the load [N],
+    `push` the entry's displacement into the channel [m], `F_far` the far end's axial support
+    force (the load cell) [N], `f_in`, `f_far` in units of F₀, `u` (saves, n + 1) every node's
+    displacement along the channel toward the far end [m], `helical`, `sinusoidal` extents [m]
+    (`extents`), `wall_force` (saves, n + 1) [N/m], `stuck_fraction`, `theta` (saves, n + 1)
+    [rad]; and the scalars `F0`, `ell`, `n`, `dt`, `result` (the worse [`jaxrod.RESULTS`][] code)."""
+    F_max, rate = _check("F_max", F_max, 0.0, False, " N"), _check("rate", rate, 0.0, False, " N/s")
+    rod3d = _rod3d_options(rod3d)
+    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d)
+    loads = [(0.0, rate)] + ([(F_max, -rate)] if unload else [])
+    rec = _phases(rod, [(push_model(rod, n, F_in=a, rate=r, **rod3d), F_max / rate) for a, r in loads], q, v, dt, n_save, progress)
+    start = np.where(rec["phase"] == 0, 0.0, F_max)
+    return _forces(rec, start + np.where(rec["phase"] == 0, rate, -rate) * rec["ts"], rec["reaction"][:, 0])
+
+
+def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unload: bool = False,
+           n: int | None = None, n_save: int = 101, imperfection: float = 1e-3, key=None,
+           dt_fraction: float = 0.3, progress: bool = False, **rod3d) -> dict:
+    """Inject the rod: the entry (node n) is pushed into the channel at `speed` [m/s] for
+    `duration` [s] (then, with `unload`, pulled back as far), while the far end (node 0) slides
+    against the dead load `F_far` [N] (`Rod3D.far_load`: a bit pressed on the rock, a catheter tip
+    against a vessel). The rod slides toward the far end all along, as the soft-string law
+    assumes. **Returns:** as `push`, with `F_in` the entry's axial support force [N] and `F_far`
+    the far load; `u[:, 0]` is how far the far end has moved."""
+    speed = _check("speed", speed, 0.0, False, " m/s")
+    F_far = _check("F_far", F_far, 0.0, True, " N")
+    rod3d = _rod3d_options(rod3d)
+    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d)
+    model = lambda sp: Rod3D(rod, n, control="displacement", speed=sp, far_load=F_far, ends="pinned", **rod3d)
+    phases = [(model(speed), duration)] + ([(model(-speed), duration)] if unload else [])
+    rec = _phases(rod, phases, q, v, dt, n_save, progress)
+    return _forces(rec, rec["reaction"][:, 1], np.full(len(rec["t"]), F_far))

@@ -13,7 +13,7 @@ __all__ = ["check_arguments"]
 CHOICES = {"ends": ("pinned", "fork", "clamped", "free"), "control": ("force", "load", "displacement"),
            "friction_at": ("surface", "axis"), "friction_precision": ("float32", "float64")}
 # name: (lower bound, bound included, unit)
-RANGES = {"speed": (None, True, "m/s"), "preload": (None, True, "N"), "contact_damping": (0.0, True, "s/m"), "damping": (0.0, True, "1/s"),
+RANGES = {"speed": (None, True, "m/s"), "preload": (None, True, "N"), "far_load": (0.0, True, "N"), "contact_damping": (0.0, True, "s/m"), "damping": (0.0, True, "1/s"),
           "contact_stiffness": (0.0, False, "N/m^2.5"), "rotary_scale": (1.0, True, "")}
 
 
@@ -31,6 +31,9 @@ def check_arguments(model) -> None:
         value = getattr(model, name)
         if value not in allowed:
             raise ValueError(f"Rod3D.{name} = {value!r} is invalid: expected one of {allowed}.")
+    if model.far_loaded and (model.control != "displacement" or model.ends == "free"):
+        raise ValueError(f"Rod3D.far_load is only for control='displacement' with held ends, not control="
+                         f"{model.control!r}, ends={model.ends!r}.")
     if not (isinstance(model.friction_sweeps, int) and model.friction_sweeps >= 1):
         raise ValueError(f"Rod3D.friction_sweeps = {model.friction_sweeps!r} is invalid: expected an int >= 1.")
     for name, (lo, closed, unit) in RANGES.items():

@@ -78,6 +78,8 @@ def external_energy(model, x):
     body = -jnp.sum(model.voronoi[:, None] * x * _body_force(model))
     if model.control == "load":
         body = body + model.end_load * x[-1, 0]
+    if model.far_loaded:
+        body = body - model.far_load * x[0, 0]
     return grav + body
 
 
@@ -149,6 +151,8 @@ def _conservative(model, X, Qr):
     ext = model.mass[:, None] * model.g_vec[None, :] + model.voronoi[:, None] * _body_force(model)
     if model.control == "load":
         ext = ext.at[-1, 0].add(-model.end_load)
+    if model.far_loaded:
+        ext = ext.at[0, 0].add(model.far_load)
     return f + ext.astype(dtype), tau
 
 

@@ -60,6 +60,8 @@ class Rod3D(AbstractModel):
       rod's ends are held (the default `F` of `initial_state` and `perturbed_state`); it sets
       the buckling threshold (see `buckle_threshold`).
     - `speed`: pushing speed [m/s] for displacement control (negative: pulled back, to unload).
+    - `far_load`: with displacement control, node 0 free along x and held back by this dead load
+      [N] (the rod slides against it: a bit on a rock); `None` (default): node 0 held (static).
     - `contact_stiffness`: Hertz constant k [N/m^2.5] per length; default: the rod sinks δ₀ = 1e-3·R
       under its weight, k = w/δ₀^{3/2}. The straight rod wrinkles into the wall once F²/(4EI) >
       1.5w/δ₀ (≈ 50 N for the reference rod): stiffen the wall for larger loads (docs/rod3d.md).
@@ -100,6 +102,8 @@ class Rod3D(AbstractModel):
     speed: Float[Array, ""]
     end_load: Float[Array, ""]
     load_rate: float = eqx.field(static=True)
+    far_loaded: bool = eqx.field(static=True)
+    far_load: Float[Array, ""]
     preload: Float[Array, ""]
     contact_stiffness: Float[Array, ""]
     contact_damping: Float[Array, ""]
@@ -119,6 +123,7 @@ class Rod3D(AbstractModel):
         speed: ArrayLike = 0.0,
         end_load: ArrayLike = 0.0,
         load_rate: float = 0.0,
+        far_load: ArrayLike | None = None,
         preload: ArrayLike = 0.0,
         contact_stiffness: ArrayLike | None = None,
         contact_damping: ArrayLike = 0.0,
@@ -136,12 +141,12 @@ class Rod3D(AbstractModel):
         self.rod = rod
         self.n_segments = int(n_segments)
         self.channel = bool(channel)
-        self.ends = ends
-        self.control = control
+        self.ends, self.control = ends, control
         self.gravity = bool(gravity)
         self.speed = float_leaf(speed)
         self.end_load = float_leaf(end_load)
         self.load_rate = float(load_rate)
+        self.far_loaded, self.far_load = far_load is not None, float_leaf(0.0 if far_load is None else far_load)
         self.preload = float_leaf(preload)
         l0 = rod.L / n_segments
         if contact_stiffness is None:
@@ -158,11 +163,9 @@ class Rod3D(AbstractModel):
         self.body_force = float_leaf(body_force)
         self.friction_sweeps = friction_sweeps
         self.friction_tol = float_leaf(friction_tol)
-        self.friction_at = friction_at
-        self.friction_precision = friction_precision
+        self.friction_at, self.friction_precision = friction_at, friction_precision
 
-    def __check_init__(self):
-        check_arguments(self)
+    __check_init__ = check_arguments
 
     # -- discretisation --------------------------------------------------------------------
     n = property(lambda self: self.n_segments)

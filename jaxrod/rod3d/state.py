@@ -65,6 +65,8 @@ def held_pattern(model) -> tuple[np.ndarray, np.ndarray]:
         nodes[[0, -1]] = True
         if model.control == "load":
             nodes[-1, 0] = False
+        if model.far_loaded:  # the far end slides against `far_load`
+            nodes[0, 0] = False
     if model.ends == "clamped":
         segs[[0, -1]] = True
     elif model.ends == "fork":
