@@ -27,6 +27,14 @@ CASES = [
     (["simulate", "--plot", "{tmp}"], "--plot"),  # a folder
     (["simulate", "--plot", "{tmp}/sim.txt"], "--plot"),  # no image format
     # ranges
+    (["lockup", "--out", "/dev/null/x"], "--out"),
+    (["lockup", "--mu", "-1"], "--mu"),
+    (["lockup", "--mu-L", "0"], "--mu-L"),
+    (["lockup", "--r-over-ell", "0.7"], "--r-over-ell"),
+    (["lockup", "--far-load", "-1"], "--far-load"),
+    (["lockup", "--speed", "0"], "--speed"),
+    (["lockup", "--damping", "-2"], "--damping"),
+    (["lockup", "--n", "2"], "--n"),
     (["map", "--dF", "abc"], "--dF"),
     (["map", "--dF", "1:2"], "--dF"),
     (["map", "--dF", "1:inf:3"], "--dF"),

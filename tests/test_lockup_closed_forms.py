@@ -364,3 +364,18 @@ def test_jit_vmap_and_no_retrace():
 def test_invalid_input_names_the_argument(call, name):
     with pytest.raises(ValueError, match=r"^" + __import__("re").escape(name) + r" = "):
         call()
+
+
+def test_the_entry_force_that_pushes_a_far_load_through_the_chain_by_hand():
+    """`entry_force` runs the chain backward from the far end: with μL/ℓ = 1, a far load of 0.5 F₀
+    needs 1.5 F₀ (straight all along); 2.5 F₀ climbs the sinusoidal section to Chen's onset 2√2 in
+    2√2 − 2.5 = 0.328 of friction length, then the helix with the weight term over the remaining
+    0.672: f = 2 tan(arctan(√2) + 0.672/2) = 6.963 F₀; above F_far,max = 2 cot(1/2) = 3.661 F₀
+    nothing can push it (inf)."""
+    L = 1.0 * ELL / MU
+    f = lambda ff: float(lk.chain.entry_force(ff * F0, L, *ARGS, MU)) / F0
+    assert math.isclose(f(0.5), 1.5, rel_tol=1e-9)
+    x_h = 1.0 - (2 * math.sqrt(2) - 2.5)
+    assert math.isclose(f(2.5), 2 * math.tan(math.atan(math.sqrt(2)) + x_h / 2), rel_tol=1e-9)
+    assert math.isclose(2 / math.tan(0.5), 3.6609754, rel_tol=1e-7)
+    assert math.isinf(f(3.7))

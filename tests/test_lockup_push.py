@@ -103,3 +103,22 @@ def test_a_rod_sliding_against_a_far_load_needs_that_load_plus_its_friction():
     np.testing.assert_allclose(r["F_in"][-5:], expected, rtol=2e-3)
     np.testing.assert_allclose(r["u"][-1, 0], r["push"][-1], rtol=1e-3)
     assert np.all(r["helical"] == 0) and np.all(r["sinusoidal"] == 0)
+
+
+def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, capsys):
+    """`jaxrod lockup` on a straight case (μL/ℓ = 0.5, far load 0.5 F₀): CSV, JSON and figure,
+    the entry force of the sliding rod (as above: 0.5 + 0.5 (1 − 1/40) + drag) and the soft
+    string's, which is 1 F₀ for every variant (no section buckles)."""
+    from jaxrod.cli import main
+
+    out = tmp_path / "lk"
+    assert main(["lockup", "--mu-L", "0.5", "--far-load", "0.5", "--push", "0.01", "--out", str(out), "--json",
+                 "--quiet"]) == 0
+    summary = __import__("json").loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert sorted(p.name for p in out.iterdir()) == ["lockup.csv", "lockup.json", "lockup.png"]
+    lo, hi = summary["entry_force_over_F0_last_fifth"]
+    expected = 0.5 + 0.5 * (1 - 1 / (2 * summary["n_segments"])) + summary["drag_over_F0"]
+    assert abs(lo - expected) < 2e-3 and abs(hi - expected) < 2e-3
+    assert all(math.isclose(v, 1.0, rel_tol=1e-9) for v in summary["soft_string_entry_force_over_F0"].values())
+    rows = (out / "lockup.csv").read_text().splitlines()
+    assert rows[0].split(",")[:4] == ["t", "push", "far_displacement", "F_in"] and len(rows) == 202

@@ -15,6 +15,7 @@ from .map import _cmd_map
 from .boundary import _cmd_boundary, _cmd_critical_load
 from .figure import _cmd_figure
 from .reproduce import _cmd_reproduce
+from .lockup import _cmd_lockup
 
 __all__ = ["main", "build_parser"]
 
@@ -127,6 +128,24 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
     rp.add_argument("--quiet", action="store_true")
     rp.set_defaults(func=_cmd_reproduce)
+
+    lk = sub.add_parser("lockup", help="one rod injected into a long channel against a far-end load (the 3D rod; "
+                        "docs/physics.md section 8)")
+    lk.add_argument("--mu-L", dest="mu_L", type=_finite_float, default=1.0, help="muL/ell (default 1)")
+    lk.add_argument("--r-over-ell", type=_finite_float, default=0.02, help="clearance r/ell (default 0.02)")
+    lk.add_argument("--mu", type=_finite_float, default=0.5, help="friction coefficient (default 0.5)")
+    lk.add_argument("--far-load", type=_finite_float, default=2.5, help="far-end load in units of F0 (default 2.5)")
+    lk.add_argument("--speed", type=_finite_float, default=5e-3, help="injection speed [m/s] (default 5e-3)")
+    lk.add_argument("--push", type=_finite_float, default=0.3, help="how far the entry is pushed [m] (default 0.3)")
+    lk.add_argument("--damping", type=_finite_float, default=20.0,
+                    help="mass-proportional damping [1/s] that takes out the start's axial wave (default 20)")
+    lk.add_argument("--unload", action="store_true", help="then pull the entry back as far")
+    lk.add_argument("--n", type=_positive_int, default=None, help="segments (default: 16 per buckle wavelength)")
+    lk.add_argument("--n-save", type=_positive_int, default=201, help="saves per phase (default 201)")
+    lk.add_argument("--out", default="results/lockup", help="output folder (default: results/lockup)")
+    lk.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    lk.add_argument("--quiet", action="store_true")
+    lk.set_defaults(func=_cmd_lockup)
 
     fg = sub.add_parser("figure", help="write a figure")
     fg.add_argument("which", choices=["phase"], help="phase: E2 phase portraits")

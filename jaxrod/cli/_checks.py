@@ -40,7 +40,9 @@ def check_args(args) -> None:
         if args.max_dF <= MIN_DF_BRACKET:
             _fail(f"argument --max-dF: {args.max_dF!r} is invalid: the bracket's top must be > its "
                   f"bottom, {MIN_DF_BRACKET:g} N.")
-    if getattr(args, "n", None) is not None and args.model in MIN_N:
+    if cmd == "lockup":
+        _check_lockup(args)
+    if getattr(args, "n", None) is not None and getattr(args, "model", None) in MIN_N:
         least, unit = MIN_N[args.model]
         if args.n < least:
             _fail(f"argument --n: {args.n!r} is invalid: the {args.model} model needs >= {least} {unit}.")
@@ -66,6 +68,20 @@ def _check_simulate(args) -> None:
         for option, value in (("--control", args.control), ("--speed", args.speed), ("--export", args.export)):
             if value is not None:
                 _fail(f"argument {option}: only with --model rod3d (got --model {args.model}).")
+
+
+def _check_lockup(args) -> None:
+    for option, value, unit in (("--mu-L", args.mu_L, ""), ("--r-over-ell", args.r_over_ell, ""), ("--mu", args.mu, ""),
+                                ("--speed", args.speed, "m/s"), ("--push", args.push, "m")):
+        _positive(option, value, unit)
+    if args.r_over_ell >= 0.5:
+        _fail(f"argument --r-over-ell: {args.r_over_ell!r} is invalid: expected < 0.5 (a slender helix).")
+    if args.far_load < 0:
+        _fail(f"argument --far-load: {args.far_load!r} is invalid: expected >= 0 (in units of F0).")
+    if args.damping < 0:
+        _fail(f"argument --damping: {args.damping!r} is invalid: expected >= 0 1/s.")
+    if args.n is not None and args.n < 4:
+        _fail(f"argument --n: {args.n!r} is invalid: the 3D rod needs >= 4 segments.")
 
 
 def _positive(option: str, x: float, unit: str) -> None:

@@ -11,7 +11,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .closed_forms import HELICAL_LAWS, HELICAL_ONSETS, SINUSOIDAL_LAWS
 from .closed_forms import _check, _choice, _f, _rod, _si, _transfer, _transfer_length, transfer_length
 
-__all__ = ["wall_force", "far_force", "force_profile", "far_force_max", "lockup_length", "section_extents"]
+__all__ = ["wall_force", "far_force", "entry_force", "force_profile", "far_force_max", "lockup_length", "section_extents"]
 
 # ---------------------------------------------------------------------------------------------
 # The chain: helical near the entry, then sinusoidal, then straight (P14–P16).
@@ -89,6 +89,29 @@ def far_force(F_in: ArrayLike, L: ArrayLike, EI: ArrayLike, w: ArrayLike, r: Arr
     L = _check("L", L, "m")
     f_in, X, F0 = _si(F_in, L, EI, w, r, mu)
     return F0 * _chain(f_in, X, fh, fs, sin, hel)[0]
+
+
+def entry_force(F_far: ArrayLike, L: ArrayLike, EI: ArrayLike, w: ArrayLike, r: ArrayLike, mu: ArrayLike,
+                **laws: str) -> Float[Array, "..."]:
+    """The entry force [N] that pushes `F_far` [N] through a rod of length `L` [m] (the inverse of
+    [`far_force`][jaxrod.lockup.chain.far_force] in F_in, which rises monotonically): what a rod
+    sliding against a load at its far end needs at its entry. `inf` where `F_far` is above
+    F_far,max(L) (past lock-up for any F_far > 0). Bisection on `far_force` to rounding (80
+    halvings of [F_far, a bracket doubled until it holds the root]). `laws` as in `far_force`.
+    """
+    F_far = _f(F_far)
+    hi = jnp.maximum(2.0 * F_far, 1e-300)
+    reach = far_force_max(L, EI, w, r, mu, **laws)
+    ok = F_far <= reach
+    # a bracket: double hi until it passes F_far (at most 2^64 times F_far)
+    for _ in range(64):
+        hi = jnp.where(ok & (far_force(hi, L, EI, w, r, mu, **laws) < F_far), 2.0 * hi, hi)
+    lo = F_far
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        below = far_force(mid, L, EI, w, r, mu, **laws) < F_far
+        lo, hi = jnp.where(below, mid, lo), jnp.where(below, hi, mid)
+    return jnp.where(ok, hi, jnp.inf)
 
 
 def force_profile(F_in: ArrayLike, s: ArrayLike, EI: ArrayLike, w: ArrayLike, r: ArrayLike,

@@ -1,0 +1,99 @@
+"""`jaxrod lockup`: one rod injected into a long channel against a far-end load (the 3D rod)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+# what the command writes per save (lockup.csv), in this order
+COLUMNS = ["t", "push", "far_displacement", "F_in", "f_in", "F_far", "f_far", "helical_over_ell",
+           "sinusoidal_over_ell", "stuck_fraction", "max_wall_force_over_w"]
+
+
+def _cmd_lockup(args) -> int:
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    import numpy as np
+
+    from ..lockup import chain
+    from ..lockup.closed_forms import HELICAL_LAWS, HELICAL_ONSETS
+    from ..lockup.push import inject, push_rod, units
+    from ..output import write_csv
+
+    # the values were checked by cli._checks (before any work)
+    rod = push_rod(args.mu_L, args.r_over_ell, args.mu)
+    F0, ell = units(rod)
+    w = float(rod.rho * rod.g)
+    duration = args.push / args.speed
+    if not args.quiet:
+        print(f"lock-up: muL/ell = {args.mu_L:g}, r/ell = {args.r_over_ell:g}, mu = {args.mu:g} (L = {float(rod.L):.3g} m, "
+              f"r = {1e3 * float(rod.R):.3g} mm, F0 = {F0:.4g} N, ell = {ell:.4g} m); far load {args.far_load:g} F0, "
+              f"pushed {args.push:g} m at {1e3 * args.speed:g} mm/s")
+    r = inject(rod, args.far_load * F0, args.speed, duration, unload=args.unload, n=args.n, n_save=args.n_save,
+               damping=args.damping, progress=not args.quiet)
+    rows = [dict(t=r["t"][k], push=r["push"][k], far_displacement=r["u"][k, 0], F_in=r["F_in"][k], f_in=r["f_in"][k],
+                 F_far=r["F_far"][k], f_far=r["f_far"][k], helical_over_ell=r["helical"][k] / ell,
+                 sinusoidal_over_ell=r["sinusoidal"][k] / ell, stuck_fraction=r["stuck_fraction"][k],
+                 max_wall_force_over_w=float(np.max(r["wall_force"][k])) / w) for k in range(len(r["t"]))]
+    loading = r["phase"] == 0
+    tail = loading & (r["push"] >= 0.8 * float(np.max(r["push"][loading])))  # the last fifth of the push
+    geometry = (float(rod.L), float(rod.EI), w, float(rod.R), args.mu)
+    soft = {f"{onset} / {law}": float(chain.entry_force(args.far_load * F0, *geometry, helical_onset=onset,
+                                                         helical_law=law)) / F0
+            for onset in HELICAL_ONSETS for law in HELICAL_LAWS}
+    from .._results import RESULTS
+
+    summary = {
+        "mu_L_over_ell": args.mu_L, "r_over_ell": args.r_over_ell, "mu": args.mu, "far_load_over_F0": args.far_load,
+        "speed": args.speed, "push": args.push, "damping": args.damping, "unload": args.unload,
+        "L": float(rod.L), "r": float(rod.R), "F0": F0, "ell": ell, "n_segments": int(r["n"]), "dt": r["dt"],
+        "entry_force_over_F0_last_fifth": [float(np.min(r["f_in"][tail])), float(np.max(r["f_in"][tail]))],
+        "helical_over_ell_end": float(r["helical"][loading][-1] / ell),
+        "sinusoidal_over_ell_end": float(r["sinusoidal"][loading][-1] / ell),
+        "drag_over_F0": args.damping * float(rod.rho) * float(rod.L) * args.speed / F0,
+        "soft_string_entry_force_over_F0": soft,
+        "result": RESULTS.describe(r["result"]),
+    }
+    os.makedirs(args.out, exist_ok=True)
+    write_csv(os.path.join(args.out, "lockup.csv"), rows)
+    with open(os.path.join(args.out, "lockup.json"), "w") as fh:
+        json.dump(summary, fh, indent=1)
+    _plot(r, summary, os.path.join(args.out, "lockup.png"))
+    if args.json:
+        print(json.dumps(summary))
+    elif not args.quiet:
+        lo, hi = summary["entry_force_over_F0_last_fifth"]
+        print(f"  entry force over the last fifth of the push: {lo:.3f}-{hi:.3f} F0 (drag of the damping "
+              f"{summary['drag_over_F0']:.3f} F0); helical {summary['helical_over_ell_end']:.2f} ell, "
+              f"sinusoidal {summary['sinusoidal_over_ell_end']:.2f} ell")
+        print("  soft string (onset / helical law): " + ", ".join(
+            f"{k} {v:.3f}" if math.isfinite(v) else f"{k} locked up" for k, v in soft.items()))
+        print(f"  result: {summary['result']}; wrote {args.out}/lockup.csv, lockup.json, lockup.png")
+    return 0 if r["result"] == 0 else 1
+
+
+def _plot(r, summary, path):
+    from ..output import subplots
+
+    fig, axes = subplots(1, 2, figsize=(11, 4))
+    ell = summary["ell"]
+    ax = axes[0]
+    ax.plot(1e3 * r["push"], r["f_in"], label="entry force (3D rod)")
+    ax.axhline(summary["far_load_over_F0"], color="k", lw=0.8, ls=":", label="far load")
+    for name, f in summary["soft_string_entry_force_over_F0"].items():
+        if f < 1e300:
+            ax.axhline(f, lw=0.8, ls="--", label=f"soft string: {name}", color="tab:gray")
+    ax.set_xlabel("push [mm]")
+    ax.set_ylabel("force / F0")
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    ax.plot(1e3 * r["push"], r["helical"] / ell, label="helical")
+    ax.plot(1e3 * r["push"], r["sinusoidal"] / ell, label="sinusoidal")
+    ax.set_xlabel("push [mm]")
+    ax.set_ylabel("extent / ell")
+    ax.legend()
+    fig.suptitle(f"muL/ell = {summary['mu_L_over_ell']:g}, r/ell = {summary['r_over_ell']:g}, mu = {summary['mu']:g}, "
+                 f"far load {summary['far_load_over_F0']:g} F0, {1e3 * summary['speed']:g} mm/s")
+    fig.savefig(path, dpi=110)
