@@ -82,9 +82,10 @@ def _plot(r, summary, path):
     ax = axes[0]
     ax.plot(1e3 * r["push"], r["f_in"], label="entry force (3D rod)")
     ax.axhline(summary["far_load_over_F0"], color="k", lw=0.8, ls=":", label="far load")
-    for name, f in summary["soft_string_entry_force_over_F0"].items():
+    colors = ("tab:red", "tab:orange", "tab:green", "tab:purple")
+    for (name, f), color in zip(summary["soft_string_entry_force_over_F0"].items(), colors):
         if f < 1e300:
-            ax.axhline(f, lw=0.8, ls="--", label=f"soft string: {name}", color="tab:gray")
+            ax.axhline(f, lw=0.8, ls="--", label=f"soft string: {name}", color=color)
     ax.set_xlabel("push [mm]")
     ax.set_ylabel("force / F0")
     ax.legend(fontsize=7)

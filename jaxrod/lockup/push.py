@@ -16,7 +16,7 @@ that buckling starts near its onset rather than from rounding. Each save records
 far-end forces, the push, the wall force per length, the stuck fraction of the contacts and
 the helical and sinusoidal extents (`extents`).
 
-Layer: beside [`jaxrod.scene`][] (it builds and runs the 3D rod); `jaxrod.lockup`'s closed
+Layer: beside `jaxrod.scene` (it builds and runs the 3D rod); `jaxrod.lockup`'s closed
 forms do not import it.
 """
 
