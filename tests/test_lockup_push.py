@@ -110,3 +110,19 @@ def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, cap
     push, far = (float(x) for x in rows[-1].split(",")[1:3])
     assert math.isclose(far, push, rel_tol=1e-2)  # the far end moves with the entry (less the compression)
     assert summary["helical_over_ell_end"] == 0 and summary["sinusoidal_over_ell_end"] == 0
+
+
+def test_lock_up_is_told_by_the_far_end_and_the_entry_force():
+    """`locked`: a far end that keeps up with the entry over the last fifth of the push slides; one
+    that advances less than half as far has locked; so has a run whose entry force passed ℓ/r F₀
+    (the helix angle no longer small) or became non-finite."""
+    from jaxrod.lockup.push import locked
+
+    push = np.linspace(0.0, 0.3, 101)
+    base = dict(phase=np.zeros(101, int), push=push, f_in=np.full(101, 4.0), ell=2.0, r=0.04)
+    sliding = dict(base, u=np.stack([push - 0.03, push], -1))
+    stalled = dict(base, u=np.stack([np.minimum(push, 0.25) - 0.03, push], -1))  # stops at 0.25 of 0.3 m
+    assert not locked(sliding) and locked(stalled)
+    assert locked(dict(sliding, f_in=np.where(push > 0.1, 60.0, 4.0)))  # past ℓ/r = 50 F₀
+    assert not locked(dict(sliding, f_in=np.where(push > 0.1, 60.0, 4.0)), cap=100.0)
+    assert locked(dict(sliding, f_in=np.where(push > 0.1, np.nan, 4.0)))

@@ -35,7 +35,7 @@ from ..rod3d import Rod3D, step_limit
 from ..simulate import simulate
 from .closed_forms import force_unit, length_unit
 
-__all__ = ["push_rod", "push_model", "push", "inject", "extents", "units", "SEGMENTS_PER_WAVE"]
+__all__ = ["push_rod", "push_model", "push", "inject", "locked", "extents", "units", "SEGMENTS_PER_WAVE"]
 
 SEGMENTS_PER_WAVE = 16
 """Default resolution: segments per buckle wavelength at the sinusoidal onset, 2π√(ℓr) (§3)."""
@@ -150,7 +150,7 @@ def _phases(rod, phases, q, v, dt, n_save, progress):
     rec = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
     s_nodes = np.arange(q.x.shape[0]) * (float(rod.L) / (q.x.shape[0] - 1))
     rec["helical"], rec["sinusoidal"] = extents(rec["theta"], s_nodes, 2 * math.pi * math.sqrt(ell * float(rod.R)))
-    rec.update(push=rec["u"][:, -1], F0=F0, ell=ell, n=q.x.shape[0] - 1, dt=dt, result=result)
+    rec.update(push=rec["u"][:, -1], F0=F0, ell=ell, r=float(rod.R), n=q.x.shape[0] - 1, dt=dt, result=result)
     return rec
 
 
@@ -210,3 +210,18 @@ def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unlo
     phases = [(model(speed), duration)] + ([(model(-speed), duration)] if unload else [])
     rec = _phases(rod, phases, q, v, dt, n_save, progress)
     return _forces(rec, rec["reaction"][:, 1], np.full(len(rec["t"]), F_far))
+
+
+def locked(rec: dict, cap: float | None = None) -> bool:
+    """Whether an `inject` run locked up: over the last fifth of the push its far end advanced
+    less than half as far as its entry, its entry force passed `cap` [F₀] (default ℓ/r, half of
+    2EI/r², where the helix angle stops being small and the run leaves the scene's range), or a
+    force became non-finite."""
+    cap = rec["ell"] / rec["r"] if cap is None else cap
+    loading = rec["phase"] == 0
+    push, far, f_in = rec["push"][loading], rec["u"][loading, 0], rec["f_in"][loading]
+    tail = push >= 0.8 * push[-1]
+    advance_in, advance_far = push[tail][-1] - push[tail][0], far[tail][-1] - far[tail][0]
+    if not np.all(np.isfinite(f_in)):
+        return True
+    return bool(np.max(f_in) > cap) or not advance_far >= 0.5 * advance_in
