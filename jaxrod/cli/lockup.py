@@ -6,17 +6,13 @@ import json
 import math
 import os
 
-# what the command writes per save (lockup.csv), in this order
-COLUMNS = ["t", "push", "far_displacement", "F_in", "f_in", "F_far", "f_far", "helical_over_ell",
-           "sinusoidal_over_ell", "stuck_fraction", "max_wall_force_over_w"]
-
-
 def _cmd_lockup(args) -> int:
     import jax
 
     jax.config.update("jax_enable_x64", True)
     import numpy as np
 
+    from .._results import RESULTS
     from ..lockup import chain
     from ..lockup.closed_forms import HELICAL_LAWS, HELICAL_ONSETS
     from ..lockup.push import inject, push_rod, units
@@ -43,8 +39,6 @@ def _cmd_lockup(args) -> int:
     soft = {f"{onset} / {law}": float(chain.entry_force(args.far_load * F0, *geometry, helical_onset=onset,
                                                          helical_law=law)) / F0
             for onset in HELICAL_ONSETS for law in HELICAL_LAWS}
-    from .._results import RESULTS
-
     summary = {
         "mu_L_over_ell": args.mu_L, "r_over_ell": args.r_over_ell, "mu": args.mu, "far_load_over_F0": args.far_load,
         "speed": args.speed, "push": args.push, "damping": args.damping, "unload": args.unload,

@@ -5,6 +5,8 @@ that reaches the far end, the lock-up length and the sections' extents."""
 
 from __future__ import annotations
 
+import math
+
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
@@ -91,27 +93,38 @@ def far_force(F_in: ArrayLike, L: ArrayLike, EI: ArrayLike, w: ArrayLike, r: Arr
     return F0 * _chain(f_in, X, fh, fs, sin, hel)[0]
 
 
-def entry_force(F_far: ArrayLike, L: ArrayLike, EI: ArrayLike, w: ArrayLike, r: ArrayLike, mu: ArrayLike,
-                **laws: str) -> Float[Array, "..."]:
-    """The entry force [N] that pushes `F_far` [N] through a rod of length `L` [m] (the inverse of
-    [`far_force`][jaxrod.lockup.chain.far_force] in F_in, which rises monotonically): what a rod
-    sliding against a load at its far end needs at its entry. `inf` where `F_far` is above
-    F_far,max(L) (past lock-up for any F_far > 0). Bisection on `far_force` to rounding (80
-    halvings of [F_far, a bracket doubled until it holds the root]). `laws` as in `far_force`.
+def entry_force(F_far: ArrayLike, L: ArrayLike, EI: ArrayLike, w: ArrayLike, r: ArrayLike, mu: ArrayLike, *,
+                helical_onset: str = "chen", sinusoidal_law: str = "weight",
+                helical_law: str = "with_weight") -> Float[Array, "..."]:
+    """The entry force [N] a rod of length `L` [m] sliding toward its far end needs to push the
+    load `F_far` [N] there: P11 integrated backward from the far end (straight up to 2F₀, then
+    sinusoidal up to the helical onset, then helical), the inverse of
+    [`far_force`][jaxrod.lockup.chain.far_force] for `F_far` > 0 (F_far + μwL for `F_far` = 0: the
+    whole rod must slide). `inf` where the helical section's force diverges within the length
+    (`F_far` above F_far,max(L), past lock-up). Arguments as in `far_force`.
     """
-    F_far = _f(F_far)
-    hi = jnp.maximum(2.0 * F_far, 1e-300)
-    reach = far_force_max(L, EI, w, r, mu, **laws)
-    ok = F_far <= reach
-    # a bracket: double hi until it passes F_far (at most 2^64 times F_far)
-    for _ in range(64):
-        hi = jnp.where(ok & (far_force(hi, L, EI, w, r, mu, **laws) < F_far), 2.0 * hi, hi)
-    lo = F_far
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        below = far_force(mid, L, EI, w, r, mu, **laws) < F_far
-        lo, hi = jnp.where(below, mid, lo), jnp.where(below, hi, mid)
-    return jnp.where(ok, hi, jnp.inf)
+    fh, fs, sin, hel = _laws(helical_onset, sinusoidal_law, helical_law)
+    L, F_far = _check("L", L, "m"), _check("F_far", F_far, "N")
+    f_far, X, F0 = _si(F_far, L, EI, w, r, mu)
+    x0 = jnp.maximum(fs - f_far, 0.0)  # the straight section, up to the sinusoidal onset
+    f1, X1 = jnp.maximum(f_far, fs), jnp.maximum(X - x0, 0.0)
+    xs = jnp.maximum(_transfer_length(jnp.maximum(f1, fh), f1, *sin), 0.0)  # the sinusoidal one
+    f2, X2 = jnp.maximum(f1, fh), jnp.maximum(X1 - xs, 0.0)
+    f_in = jnp.where(X <= x0, f_far + X, jnp.where(X1 <= xs, _backward(f1, X1, *sin), _backward(f2, X2, *hel)))
+    return F0 * f_in
+
+
+def _backward(f, x, a, b):
+    """The force at the start of a friction length `x` of a section with wall force w (a + b f²)
+    that ends with the force `f` (P12 run backward; `inf` where it diverges)."""
+    if b == 0:
+        return f + a * x
+    if a == 0:
+        den = 1.0 / jnp.where(f > 0, f, 1.0) - b * x
+        return jnp.where(f > 0, jnp.where(den > 0, 1.0 / jnp.where(den > 0, den, 1.0), jnp.inf), 0.0)
+    c = math.sqrt(a / b)
+    phi = jnp.arctan(f / c) + math.sqrt(a * b) * x
+    return jnp.where(phi < 0.5 * math.pi, c * jnp.tan(jnp.minimum(phi, 0.5 * math.pi)), jnp.inf)
 
 
 def force_profile(F_in: ArrayLike, s: ArrayLike, EI: ArrayLike, w: ArrayLike, r: ArrayLike,

@@ -75,15 +75,18 @@ def units(rod: RodChannel) -> tuple[float, float]:
     return float(force_unit(rod.EI, w, rod.R)), float(length_unit(rod.EI, w, rod.R))
 
 
+def _wave(rod: RodChannel) -> float:
+    """The buckle wavelength at the sinusoidal onset, 2π√(ℓr) [m] (§3)."""
+    return 2 * math.pi * math.sqrt(units(rod)[1] * float(rod.R))
+
+
 def push_model(rod: RodChannel, n: int | None = None, F_in: float = 0.0, rate: float = 0.0, **rod3d) -> Rod3D:
     """The 3D rod of the scene: `n` segments (default `SEGMENTS_PER_WAVE` per buckle wavelength
     at the sinusoidal onset, at least 20), pinned ends, the far end (node 0) held and the entry
     (node n) guided on the channel bottom, free along the rod and pushed by the dead load `F_in`
     [N] rising at `rate` [N/s]; other keywords go to [`jaxrod.rod3d.Rod3D`][]."""
     if n is None:
-        _, ell = units(rod)
-        wave = 2 * math.pi * math.sqrt(ell * float(rod.R))
-        n = max(20, math.ceil(SEGMENTS_PER_WAVE * float(rod.L) / wave))
+        n = max(20, math.ceil(SEGMENTS_PER_WAVE * float(rod.L) / _wave(rod)))
     return Rod3D(rod, int(n), control="load", end_load=F_in, load_rate=rate, ends="pinned", **rod3d)
 
 
@@ -151,7 +154,7 @@ def _phases(rod, phases, q, v, dt, n_save, progress):
         result = max(result, int(sol.result))
     rec = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
     s_nodes = np.arange(q.x.shape[0]) * (float(rod.L) / (q.x.shape[0] - 1))
-    rec["helical"], rec["sinusoidal"] = extents(rec["theta"], s_nodes, 2 * math.pi * math.sqrt(ell * float(rod.R)))
+    rec["helical"], rec["sinusoidal"] = extents(rec["theta"], s_nodes, _wave(rod))
     rec.update(push=rec["u"][:, -1], F0=F0, ell=ell, r=float(rod.R), n=q.x.shape[0] - 1, dt=dt, result=result)
     return rec
 
