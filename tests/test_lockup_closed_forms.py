@@ -375,6 +375,7 @@ def test_the_entry_force_that_pushes_a_far_load_through_the_chain_by_hand():
     L = 1.0 * ELL / MU
     f = lambda ff: float(lk.chain.entry_force(ff * F0, L, *ARGS, MU)) / F0
     assert math.isclose(f(0.5), 1.5, rel_tol=1e-9)
+    assert math.isclose(f(0.0), 1.0, rel_tol=1e-12)  # nothing at the far end: the whole rod's friction, μwL
     x_h = 1.0 - (2 * math.sqrt(2) - 2.5)
     assert math.isclose(f(2.5), 2 * math.tan(math.atan(math.sqrt(2)) + x_h / 2), rel_tol=1e-9)
     assert math.isclose(2 / math.tan(0.5), 3.6609754, rel_tol=1e-7)
