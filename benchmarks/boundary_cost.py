@@ -19,7 +19,7 @@ this machine side by side in one process, wall times after compilation (best of 
 Writes `benchmarks/results/boundary_cost.csv` (plain numbers).
 
     python benchmarks/boundary_cost.py [--skip-e4]
-    python benchmarks/boundary_cost.py --rod3d 12 60 120  # rows of other segment counts are kept
+    python benchmarks/boundary_cost.py --rod3d 12 60 120 [--method bisection]  # other rows are kept
 """
 
 from __future__ import annotations
@@ -130,14 +130,14 @@ def e4(rows):
           f"{np.median(gap) if gap.size else math.nan:.1e} (the old indicator's root lies above the 2 s label boundary)")
 
 
-def rod3d(segments):
+def rod3d(segments, methods=("bisection", "departure")):
     """The 3D rod's v₀* at ΔF = 5 N, rtol 1e-2, by both methods, from the wide bracket and from
     the field model's v₀* (a prediction: bracket a factor 2 either side, first run there)."""
     vf = float(bd.critical_velocity(ROD, 5.0, model="field", rtol=1e-4, sensitivities=())[0].root)
     print(f"field model v0* = {1e3 * vf:.3f} mm/s (the prediction)", flush=True)
     rows = []
     for n in segments:
-        for method in ("bisection", "departure"):  # one compiled search per method and n
+        for method in methods:  # one compiled search per method and n
             for name, bracket, start in (("wide", (1e-4, 1.0), None), ("predicted", (vf / 2, 2 * vf), vf)):
                 t0 = time.perf_counter()
                 r = jax.block_until_ready(bd.critical_velocity(
@@ -151,11 +151,11 @@ def rod3d(segments):
                       f"{dt:.1f} s" + (" (with the method's compilation)" if name == "wide" else ""), flush=True)
     os.makedirs(OUT, exist_ok=True)
     path = os.path.join(OUT, "boundary_cost_rod3d.csv")
-    if os.path.exists(path):  # the rows of other segment counts are kept
+    if os.path.exists(path):  # the rows of other segment counts and methods are kept
         import csv
 
         with open(path) as fh:
-            rows = [r for r in csv.DictReader(fh) if int(r["segments"]) not in segments] + rows
+            rows = [r for r in csv.DictReader(fh) if int(r["segments"]) not in segments or r["method"] not in methods] + rows
     write_csv(path, sorted(rows, key=lambda r: int(r["segments"])))
 
 
@@ -163,10 +163,11 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--skip-e4", action="store_true")
     p.add_argument("--rod3d", type=int, nargs="+", metavar="N", help="only the 3D rod's search, at N segments")
+    p.add_argument("--method", choices=("bisection", "departure"), help="with --rod3d: only this method")
     a = p.parse_args()
     print(f"{jax.local_device_count()} device(s), {jax.devices()[0].platform}")
     if a.rod3d:
-        return rod3d(a.rod3d)
+        return rod3d(a.rod3d, (a.method,) if a.method else ("bisection", "departure"))
     rows = []
     evaluations(rows)
     wall_time(rows)

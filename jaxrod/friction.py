@@ -100,7 +100,13 @@ class Coulomb(AbstractFriction):
         p = −(W + λI)⁻¹u with |p| = `bound_slip` (a 1D secular equation in λ, solved by Newton:
         8 iterations from a lower bound of the root, or 3 from the λ that the impulse `guess`
         satisfies for this u, −(u + W·guess)·guess/|guess|², kept between the root's bounds;
-        the slip impulse is scaled onto the bound exactly)."""
+        the slip impulse is scaled onto the bound exactly).
+
+        The slip equation is solved in units where it is of order one: λ = λ_max·t with
+        λ_max = |u|/c (c the bound) and W' = W/λ_max, so that |(W' + tI)⁻¹û| = 1 for a unit û.
+        Unscaled, a contact whose normal force vanishes (a node lifting off, c → 0) makes λ of
+        order |u|/c and the Newton step's det·|y|² of order λ⁴, which overflows float32 (the
+        friction pass's default) from c ≈ 1e-10 |u|/|W|: the state became non-finite."""
         W11, W12, W22 = W
 
         def adj(lam, b1, b2):  # adj(W + λI) b and det(W + λI): (W + λI)⁻¹ b = adj b / det
@@ -112,27 +118,33 @@ class Coulomb(AbstractFriction):
         p_stick = (-y1 / det, -y2 / det)
         sticks = safe_hypot(*p_stick) <= bound_stick
         slips = ~sticks & (bound_slip > 0)
-        # slip: Newton on φ(λ) = 1/|p(λ)| − 1/c (concave, increasing) within the root's bounds
-        # |u|/c − tr W ≤ λ* ≤ |u|/c. With p = −y/D (y = adj u, D = det): φ = D/|y| − 1/c and
-        # φ' = p·A⁻¹p/|p|³ = y·adj y/|y|³, so a step is one expression with one square root and
-        # one division (on CPU each divided intermediate with several users is a kernel of its own)
+        # slip, scaled (above): Newton on φ(t) = 1/|p(t)| − 1 (concave, increasing) within the
+        # root's bounds 1 − tr W' ≤ t* ≤ 1. With p = −y/D (y = adj û, D = det): φ = D/|y| − 1
+        # and φ' = y·adj y/|y|³, so a step is one expression with one square root and one
+        # division (on CPU each divided intermediate with several users is a kernel of its own)
         c = jnp.where(slips, bound_slip, 1.0)
-        trW = W11 + W22
-        us = (jnp.where(slips, u[0], 2.0 * trW), jnp.where(slips, u[1], 0.0))
-        hi = safe_hypot(*us) / c
-        lo = jnp.maximum(0.0, hi - trW)
-        lam, iterations = lo, 8
+        norm = jnp.where(slips, safe_hypot(*u), 1.0)
+        scale = c / norm  # 1/λ_max
+        us = (jnp.where(slips, u[0] / norm, 1.0), jnp.where(slips, u[1] / norm, 0.0))  # û
+        w11, w12, w22 = W11 * scale, W12 * scale, W22 * scale  # W'
+        lo = jnp.maximum(0.0, 1.0 - (w11 + w22))
+        t, iterations = lo, 8
         if guess is not None:
             g1, g2 = guess
             gg = g1 * g1 + g2 * g2
-            est = -((us[0] + W11 * g1 + W12 * g2) * g1 + (us[1] + W12 * g1 + W22 * g2) * g2) / jnp.where(gg > 0, gg, 1.0)
-            lam, iterations = jnp.where(gg > 0, jnp.clip(est, lo, hi), lo), 3
+            est = -((u[0] + W11 * g1 + W12 * g2) * g1 + (u[1] + W12 * g1 + W22 * g2) * g2) / jnp.where(gg > 0, gg, 1.0)
+            t, iterations = jnp.where(gg > 0, jnp.clip(est * scale, lo, 1.0), lo), 3
+
+        def adj_s(t, b1, b2):  # adj(W' + tI) b and det(W' + tI)
+            a11, a22 = w11 + t, w22 + t
+            return (a22 * b1 - w12 * b2, a11 * b2 - w12 * b1), a11 * a22 - w12 * w12
+
         for _ in range(iterations):
-            (y1, y2), det = adj(lam, *us)
-            (z1, z2), _ = adj(lam, y1, y2)
+            (y1, y2), det = adj_s(t, *us)
+            (z1, z2), _ = adj_s(t, y1, y2)
             yy = y1 * y1 + y2 * y2
-            lam = jnp.clip(lam - (det * yy - yy * jnp.sqrt(yy) / c) / (y1 * z1 + y2 * z2), lo, hi)
-        (y1, y2), _ = adj(lam, *us)
+            t = jnp.clip(t - (det * yy - yy * jnp.sqrt(yy)) / (y1 * z1 + y2 * z2), lo, 1.0)
+        (y1, y2), _ = adj_s(t, *us)
         k = c / safe_hypot(y1, y2)  # onto |p| = c
         return tuple(jnp.where(sticks, ps, jnp.where(slips, -k * y, 0.0)) for ps, y in zip(p_stick, (y1, y2))), sticks
 

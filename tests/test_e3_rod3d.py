@@ -103,3 +103,15 @@ def test_label_is_the_scene_run_of_the_3d_rod():
         assert bool(label(jnp.asarray(20.0), jnp.asarray(v0))) == bool(b)
         seen.add(bool(b))
     assert seen == {False, True}  # both labels occur
+
+
+def test_bisect_stops_at_a_failed_run():
+    """A failed run (label None: the 3D rod's state became non-finite) ends the search with no
+    bracket instead of counting as stable."""
+    calls = []
+
+    def label(v):
+        calls.append(v)
+        return None if len(calls) == 3 else v > 1.3
+
+    assert _bisect(label, 1.0, 0.04, 0.01, 40) is None and len(calls) == 3

@@ -143,3 +143,28 @@ def test_a_confirmed_departure_root_lies_in_a_label_bracket():
     held = bd.departure_secant(ev, 0.5, 4.0, 1e3, confirm=True, **kw)
     lo, hi, root = float(held.lo), float(held.hi), float(held.root)
     assert int(held.result) == 0 and lo <= 1.0 < hi and hi - lo <= 1e-2 * hi and lo <= root <= hi
+
+
+def test_a_failed_run_ends_a_search_instead_of_counting_as_stable():
+    """A run that fails (NaN label: its state became non-finite) says nothing about stability:
+    bisection and the departure search stop there with `nonfinite` and no root, keeping the
+    bracket of the runs that worked. Here x > 2.5 fails and the root is 0.3: counted as stable,
+    the failed end would have made the bracket invalid (or, below the root, moved lo past it)."""
+    c, bad = 0.3, 2.5
+
+    def label(x):
+        return jnp.where(x > bad, jnp.nan, jnp.where(x > c, 1.0, 0.0))
+
+    res = bd.bisection(label, 1e-3, 4.0, rtol=1e-4)
+    assert int(res.result) == bd.ROOT_RESULTS.nonfinite and int(res.evaluations) == 2
+    # a failure inside the bracket: at the first (geometric) midpoint, √0.002, the search stops
+    res = bd.bisection(lambda x: jnp.where(jnp.abs(x - math.sqrt(2e-3)) < 1e-6, jnp.nan, label(x)), 1e-3, 2.0, rtol=1e-4)
+    assert int(res.result) == bd.ROOT_RESULTS.nonfinite and float(res.lo) == pytest.approx(1e-3)
+    assert float(res.hi) == pytest.approx(2.0) and int(res.evaluations) == 3
+    # the departure search, started at a failing point and from one that works
+    ev = lambda x: (label(x), jnp.where(x > c, 50.0 * (x - c), jnp.nan))  # noqa: E731
+    r = bd.departure_secant(ev, 0.01, 4.0, 1e3, start=3.0, rtol=1e-6)
+    assert int(r.result) == bd.ROOT_RESULTS.nonfinite and np.isnan(float(r.root)) and int(r.evaluations) == 1
+    assert float(r.lo) == pytest.approx(0.01) and float(r.hi) == pytest.approx(4.0)
+    ok = bd.departure_secant(ev, 0.01, 4.0, 1e3, start=2.0, rtol=1e-6)
+    assert int(ok.result) == 0 and float(ok.root) == pytest.approx(c, rel=1e-5)

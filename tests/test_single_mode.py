@@ -364,6 +364,26 @@ def test_vector_coulomb_impulse_from_poor_and_degenerate_guesses():
     np.testing.assert_allclose(d, [-1 / 6] * 3, rtol=1e-9)
 
 
+def test_vector_coulomb_impulse_at_a_vanishing_bound_in_float32():
+    """A contact whose normal force vanishes (a node lifting off the wall) slips with a bound c
+    far below |u|/|W|: the impulse is −c·(W + λI)⁻¹u/|…| with λ ≈ |u|/c, whose unscaled Newton
+    step overflowed float32 from c ≈ 1e-12 here (the 3D rod's state became non-finite). In
+    float32, from 1e-5 down to 1e-29 and with or without a guess, it is the float64 bisection's
+    impulse to 1e-5 of the bound."""
+    c = 10.0 ** np.arange(-5.0, -31.0, -3.0)
+    k = len(c)
+    u = np.stack([np.full(k, 0.8), np.full(k, 0.1)])
+    W11, W12, W22 = np.full(k, 2e3), np.full(k, 300.0), np.full(k, 3e3)  # 1/kg, as the 3D rod's nodes
+    ref = np.stack(_slip_impulse_by_bisection(u, W11, W12, W22, c))
+    f32 = lambda a: jnp.asarray(a, jnp.float32)  # noqa: E731
+    args = (tuple(map(f32, u)), tuple(map(f32, (W11, W12, W22))), f32(c), f32(c))
+    for guess in (None, (f32(0.5 * ref[0]), f32(0.0 * c))):
+        p, sticks = jr.Coulomb().impulse_2d(*args, guess=guess)
+        assert not np.asarray(sticks).any()
+        err = np.hypot(*(np.stack(p).astype(np.float64) - ref)) / c
+        assert np.all(np.isfinite(err)) and err.max() < 1e-5, err
+
+
 def test_linear_flow_is_the_exact_free_motion():
     """`linear_flow` (the exponential integrator's linear part): A(h) = A cos ωh + Ȧ sin(ωh)/ω
     for k = ω² > 0 and cosh/sinh for k < 0, on both sides of the Stumpff series' switch (kh² = 1e-3)."""

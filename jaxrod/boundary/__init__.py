@@ -41,6 +41,7 @@ from .roots import continuation as continuation
 from .indicators import single_mode_indicator as single_mode_indicator
 from .indicators import rod_indicator as rod_indicator
 from .indicators import crossing_state as crossing_state
+from .indicators import run_label as run_label
 from .indicators import departure_rate as departure_rate
 from .indicators import departure_sensitivities as departure_sensitivities
 from .indicators import smooth_single_mode_indicator as smooth_single_mode_indicator
@@ -50,4 +51,4 @@ from .search import boundary_curve as boundary_curve
 from .search import critical_load_curve as critical_load_curve
 from .search import METHODS as METHODS
 
-__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'implicit_sensitivities', 'continuation', 'single_mode_indicator', 'rod_indicator', 'crossing_state', 'departure_rate', 'departure_sensitivities', 'smooth_single_mode_indicator', 'METHODS', 'critical_velocity', 'critical_load', 'boundary_curve', 'critical_load_curve']
+__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'implicit_sensitivities', 'continuation', 'single_mode_indicator', 'rod_indicator', 'run_label', 'crossing_state', 'departure_rate', 'departure_sensitivities', 'smooth_single_mode_indicator', 'METHODS', 'critical_velocity', 'critical_load', 'boundary_curve', 'critical_load_curve']

@@ -7,13 +7,15 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 from jax.flatten_util import ravel_pytree
+from jaxtyping import Array, Float
 
+from .._results import RESULTS
 from ..integrators.base import RunOptions
 from ..models import SingleMode, exact_solution
 from ..scene import Scene
 from ..simulate import simulate
 
-__all__ = ['single_mode_indicator', 'rod_indicator', 'crossing_state', 'departure_rate', 'departure_sensitivities', 'smooth_single_mode_indicator']
+__all__ = ['single_mode_indicator', 'rod_indicator', 'run_label', 'crossing_state', 'departure_rate', 'departure_sensitivities', 'smooth_single_mode_indicator']
 
 
 def single_mode_indicator(Adot0, k, f_s, f_d, A0=0.0, horizon: float = 10.0):
@@ -43,8 +45,17 @@ def rod_indicator(scene: Scene, t1: float = 0.5):
     return jnp.log(jnp.maximum(amp, 1e-300) / scene.threshold)
 
 
+def run_label(sol) -> Float[Array, ""]:
+    """The label of a finished run: 1.0 buckled, 0.0 not (held, or stable at its horizon), NaN
+    when the run failed (its state became non-finite or its step was above the limit), which says
+    nothing about the rod's stability: a search must not count it as stable."""
+    ok = sol.result == RESULTS.successful
+    return jnp.where(ok, sol.buckled.astype(jnp.result_type(float)), jnp.nan)
+
+
 def crossing_state(scene: Scene, t1: float = 2.0, tangents: bool = False):
-    """The state where the run of `scene` stops: `((q, v), buckled)`, at the first step past the
+    """The state where the run of `scene` stops: `((q, v), label)` (`run_label`: 1.0 buckled,
+    0.0 not, NaN for a failed run), at the first step past the
     buckling threshold, when the rod is stuck (then it stays stuck; the reduced models are
     frozen at the step they stick, the 3D rod at the next of 200 saves), or at `t1` [s] —
     whichever comes first, so that both labels are cheap. Differentiable (forward mode) in every
@@ -56,7 +67,7 @@ def crossing_state(scene: Scene, t1: float = 2.0, tangents: bool = False):
         model, scene.integrator(), q0, v0, t1, n_save=201,
         options=RunOptions(buckle_threshold=scene.threshold, save_state=False), throw=False,
     )
-    return (sol.q_final, sol.v_final), sol.buckled
+    return (sol.q_final, sol.v_final), run_label(sol)
 
 
 def _along(a, b):
@@ -84,14 +95,15 @@ def departure_rate(scene_of, x, t1: float = 2.0):
     the 3D rod u projects the node velocities on the nodes' tangent, `Rod3D.translation`), `x`, `t1` (horizon [s]: a run that neither sticks nor buckles by then
     counts as stable).
 
-    **Returns:** `(buckled, u)`, `u` in units of x per second (`nan` when not buckled).
+    **Returns:** `(label, u)`: the run's `run_label` (1.0 buckled, 0.0 not, NaN failed) and
+    `u` in units of x per second (`nan` when not buckled).
     """
     x = jnp.asarray(x, jnp.result_type(float))
-    (_, v), (dq, _), buckled = jax.jvp(
+    (_, v), (dq, _), label = jax.jvp(
         lambda x: crossing_state(scene_of(x), t1, tangents=True), (x,), (jnp.ones_like(x),), has_aux=True
     )
     dq, v = scene_of(x).model().translation(dq, v)  # the 3D rod: node positions and velocities
-    return buckled, jnp.where(buckled, _along(v, dq), jnp.nan)
+    return label, jnp.where(label > 0, _along(v, dq), jnp.nan)
 
 
 def departure_sensitivities(scene_of, x, params: dict, t1: float = 2.0) -> dict:

@@ -25,7 +25,7 @@ class ROOT_RESULTS:
         0: "converged",
         1: "the iteration cap was reached before the tolerance",
         2: "the bracket does not contain a sign change (g(lo) <= 0 < g(hi) is required)",
-        3: "the indicator was not finite",
+        3: "the indicator was not finite (a run failed: non-finite state or a step above its limit)",
     }
 
 
@@ -151,8 +151,10 @@ def departure_secant(
     confirm: bool = False,
 ) -> RootResult:
     """The boundary x* in [`lo`, `hi`] from runs that stop as soon as their label is known:
-    `evaluate(x)` returns `(buckled, u)` with u ≈ λ·(x − x*) > 0 for a buckled run (see
-    [`jaxrod.boundary.departure_rate`][]) and no number for a stable one.
+    `evaluate(x)` returns `(label, u)` with u ≈ λ·(x − x*) > 0 for a buckled run (see
+    [`jaxrod.boundary.departure_rate`][]) and no number for a stable one; the label is a
+    boolean (True: buckled) or 1.0 / 0.0, NaN for a failed run, which ends the search with
+    `ROOT_RESULTS.nonfinite` and the bracket known so far.
 
     Each iteration steps from the lowest buckled point x₁ to x₁ − u₁/s, with s the slope of u
     between the two lowest buckled points (a secant on the linear branch), or `rate_bound`
@@ -205,44 +207,50 @@ def departure_secant(
         return ~st[9] & (st[8] < max_iter)
 
     def body(st):
-        x, lo, hi, x1, u1, x2, u2, lo_run, n, done, invalid, root, s, was_stable = st
-        buckled, u = evaluate(x)
+        x, lo, hi, x1, u1, x2, u2, lo_run, n, done, invalid, root, s, was_stable, failed = st
+        label, u = evaluate(x)
+        label = jnp.asarray(label).astype(dtype)
+        failed = jnp.isnan(label)
+        buckled = label > 0
         n = n + 1
-        invalid = invalid | (buckled & (x <= lo_bound)) | (~buckled & (x >= hi_bound))
+        invalid = invalid | (buckled & (x <= lo_bound)) | (~buckled & ~failed & (x >= hi_bound))
         lower = buckled & (x < x1)
         x2, u2 = jnp.where(lower, x1, jnp.where(buckled & (x < x2), x, x2)), jnp.where(
             lower, u1, jnp.where(buckled & (x < x2), u, u2))
         x1, u1 = jnp.where(lower, x, x1), jnp.where(lower, u, u1)
         hi = jnp.where(buckled, jnp.minimum(hi, x), hi)
-        lo = jnp.where(buckled, lo, jnp.maximum(lo, x))
-        lo_run = lo_run | (~buckled & (x <= lo_bound))
+        lo = jnp.where(buckled | failed, lo, jnp.maximum(lo, x))
+        lo_run = lo_run | (~buckled & ~failed & (x <= lo_bound))
         c, small, s = candidate(lo, hi, x1, u1, x2, u2, was_stable & ~buckled)
         narrow = (hi - lo) <= rtol * jnp.abs(hi)
         # ending next to an untested lower end: run it once, to tell a root from a bad bracket
         unconfirmed = small & ~narrow if confirm else jnp.zeros_like(small)  # no stable run holds it yet
         accepted = (small & ~unconfirmed) | narrow
         check_lo = accepted & (lo <= lo_bound) & ~lo_run
-        finished = invalid | (accepted & ~check_lo)
+        finished = invalid | failed | (accepted & ~check_lo)
         root = jnp.where(small, c, _mid(lo, hi, False))
         x_next = jnp.where(check_lo, lo_bound, jnp.where(unconfirmed, x1 - 0.9 * rtol * jnp.abs(x1), c))
-        return x_next, lo, hi, x1, u1, x2, u2, lo_run, n, finished, invalid, root, s, ~buckled
+        return x_next, lo, hi, x1, u1, x2, u2, lo_run, n, finished, invalid, root, s, ~buckled, failed
 
     inf = jnp.asarray(jnp.inf, dtype)
     st = (x0, lo, hi, inf, nan, inf, nan, jnp.array(False), jnp.array(0), jnp.array(False),
-          jnp.array(False), nan, nan, jnp.array(False))
-    x, lo, hi, x1, u1, x2, u2, lo_run, n, done, invalid, root, s, _ = jax.lax.while_loop(cond, body, st)
+          jnp.array(False), nan, nan, jnp.array(False), jnp.array(False))
+    x, lo, hi, x1, u1, x2, u2, lo_run, n, done, invalid, root, s, _, failed = jax.lax.while_loop(cond, body, st)
     result = jnp.where(
-        invalid, ROOT_RESULTS.invalid_bracket,
-        jnp.where(done, ROOT_RESULTS.converged, ROOT_RESULTS.max_iterations),
+        failed, ROOT_RESULTS.nonfinite, jnp.where(
+            invalid, ROOT_RESULTS.invalid_bracket,
+            jnp.where(done, ROOT_RESULTS.converged, ROOT_RESULTS.max_iterations)),
     ).astype(jnp.int32)
     # a failed search names no root (its bracket still says what is known)
-    root = jnp.where(done & ~invalid, root, jnp.nan)
+    root = jnp.where(done & ~invalid & ~failed, root, jnp.nan)
     return RootResult(root, lo, jnp.minimum(hi, x1), u1, s, n.astype(jnp.int32), result)
 
 
 def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bool = True) -> RootResult:
     """Plain bisection on the sign of g (the baseline; no derivatives), to `rtol`·|x|. `g` may
-    return a boolean label (True: above the root)."""
+    return a boolean label (True: above the root). A NaN value (a failed run, see
+    [`jaxrod.boundary.crossing_state`][]) ends the search with `ROOT_RESULTS.nonfinite` and the
+    bracket known so far: it says nothing about the side of the root."""
     dtype = jnp.result_type(float)
     label = g
 
@@ -253,11 +261,12 @@ def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bo
     lo = jnp.asarray(lo, dtype)
     hi = jnp.asarray(hi, dtype)
     g_lo, g_hi = g(lo), g(hi)
+    finite = jnp.isfinite(g_lo) & jnp.isfinite(g_hi)
     valid = (g_lo <= 0) & (g_hi > 0)
 
     def cond(s):
-        lo, hi, n, _ = s
-        return (hi - lo > rtol * jnp.abs(hi)) & (n < max_iter) & valid
+        lo, hi, n, gx = s
+        return (hi - lo > rtol * jnp.abs(hi)) & (n < max_iter) & valid & jnp.isfinite(gx)
 
     def body(s):
         lo, hi, n, _ = s
@@ -265,10 +274,11 @@ def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bo
         gx = g(x)
         return jnp.where(gx <= 0, x, lo), jnp.where(gx > 0, x, hi), n + 1, gx
 
-    lo, hi, n, gx = jax.lax.while_loop(cond, body, (lo, hi, jnp.array(0), g_hi))
+    lo, hi, n, gx = jax.lax.while_loop(cond, body, (lo, hi, jnp.array(0), jnp.where(finite, g_hi, jnp.nan)))
     ok = hi - lo <= rtol * jnp.abs(hi)
-    result = jnp.where(~valid, ROOT_RESULTS.invalid_bracket,
-                       jnp.where(ok, ROOT_RESULTS.converged, ROOT_RESULTS.max_iterations)).astype(jnp.int32)
+    result = jnp.where(~jnp.isfinite(gx), ROOT_RESULTS.nonfinite, jnp.where(
+        ~valid, ROOT_RESULTS.invalid_bracket,
+        jnp.where(ok, ROOT_RESULTS.converged, ROOT_RESULTS.max_iterations))).astype(jnp.int32)
     return RootResult(0.5 * (lo + hi), lo, hi, gx, jnp.nan * gx, (n + 2).astype(jnp.int32), result)
 
 

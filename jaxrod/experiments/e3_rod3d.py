@@ -40,7 +40,8 @@ SINK = 1e-3  # the 3D rod's default contact: it sinks 1e-3·R into the wall unde
 
 
 def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, scheme="leapfrog"):
-    """The jitted label (ΔF [N], v₀ [m/s]) → buckled of the 3D rod of `n` segments under the
+    """The jitted label (ΔF [N], v₀ [m/s]) → 1.0 buckled, 0.0 not, NaN for a failed run
+    ([`jaxrod.boundary.run_label`][]) of the 3D rod of `n` segments under the
     dead load F⁰₆ + ΔF with a sine mode-6 lateral velocity v₀: the run of
     [`jaxrod.boundary.crossing_state`][] (stops when it buckles or sticks, at most `t1` [s],
     step `dt` [s]) — with the defaults the same run as the scene `Scene(kind="rod3d")`, with
@@ -48,6 +49,7 @@ def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, sc
     that the rod sinks `sink`·R into it under its weight (`Rod3D`'s default: 1e-3), `scheme`
     `"leapfrog"` ([`jaxrod.ProjectedLeapfrog`][], the 3D rod's default) or `"verlet"`
     ([`jaxrod.ProjectedVerlet`][])."""
+    from ..boundary import run_label
     from ..integrators import SCHEMES
     from ..integrators.base import RunOptions
     from ..rod3d import Rod3D
@@ -63,7 +65,7 @@ def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, sc
                       ends=ends, contact_stiffness=rod.w / (sink * rod.R) ** 1.5)
         q0, v0 = SineVelocity(v0).initial_state(model, integrator)
         opts = RunOptions(buckle_threshold=0.5, save_state=False)  # the dead load's threshold
-        return simulate(model, integrator, q0, v0, t1, n_save=201, options=opts, throw=False).buckled
+        return run_label(simulate(model, integrator, q0, v0, t1, n_save=201, options=opts, throw=False))
 
     return buckled
 
@@ -82,7 +84,7 @@ def _runs_of(path, n, mu, t1, dt, friction_at, ends, sink, scheme):
                         and math.isclose(float(r["sink"]), sink)
                         and math.isclose(float(r["t1"]), t1) and math.isclose(float(r["dt"]), dt, rel_tol=DT_RTOL)
                         and (r.get("scheme") or "verlet") == scheme)
-                if same:
+                if same and r["buckled"] != "":  # a failed run (no label) is run again
                     done[(float(r["dF"]), float(r["v0"]))] = r["buckled"] == "1"
     return done
 
@@ -109,18 +111,21 @@ def _append(path, row):
 
 
 def _bisect(label, guess, width, rtol, max_runs):
-    """The boundary of a label monotone in v₀ (False below, True above) from a first bracket
+    """The boundary of a label monotone in v₀ (False below, True above; None for a failed run,
+    which ends the search) from a first bracket
     guess·(1 ∓ width): widened geometrically (×(1 + 2·width) per try, doubling) until its ends
     differ, then bisected geometrically until hi/lo − 1 ≤ `rtol`.
 
     **Returns:** `(lo, hi)` (largest stable, smallest buckled amplitude tested) or `None` when
-    `max_runs` labels did not bracket it, or every amplitude down to guess·1e-6 buckled (up to
-    guess·1e6 held)."""
+    `max_runs` labels did not bracket it, every amplitude down to guess·1e-6 buckled (up to
+    guess·1e6 held), or a run failed."""
     lo, hi = guess * (1 - width), guess * (1 + width)
     b_lo, b_hi = label(lo), label(hi)
     runs, step = 2, 1 + 2 * width
     floor, ceiling = guess * 1e-6, guess * 1e6  # the doubling step would otherwise reach 0 or ∞
-    while b_lo == b_hi:
+    while b_lo == b_hi or b_lo is None or b_hi is None:
+        if b_lo is None or b_hi is None:
+            return None
         if runs >= max_runs or (b_lo and lo <= floor) or (not b_hi and hi >= ceiling):
             return None
         if b_lo:  # both buckled: the boundary lies below
@@ -133,7 +138,10 @@ def _bisect(label, guess, width, rtol, max_runs):
         step *= step
     while hi / lo - 1 > rtol and runs < max_runs:
         mid = math.sqrt(lo * hi)
-        if label(mid):
+        b = label(mid)
+        if b is None:
+            return None
+        if b:
             hi = mid
         else:
             lo = mid
@@ -177,14 +185,16 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
             key = (dF, float(v0))
             if key not in done:
                 t = time.perf_counter()
-                done[key] = bool(buckled(jnp.asarray(dF), jnp.asarray(v0)))
+                b = float(buckled(jnp.asarray(dF), jnp.asarray(v0)))
+                done[key] = None if math.isnan(b) else bool(b)
                 sec = time.perf_counter() - t
                 count[1] += sec
                 _append(runs_csv, dict(dF=dF, n_segments=n, mu=mu, friction_at=friction_at, ends=ends, sink=sink, t1=t1,
                                        dt=dt, scheme=scheme, v0=float(v0),
-                                       buckled=int(done[key]), seconds=round(sec, 2)))
+                                       buckled="" if done[key] is None else int(done[key]), seconds=round(sec, 2)))
                 if progress:
-                    print(f"  ΔF = {dF:g} N, v0 = {1e3 * v0:.3f} mm/s: {'buckled' if done[key] else 'stable'}"
+                    verdict = "failed" if done[key] is None else "buckled" if done[key] else "stable"
+                    print(f"  ΔF = {dF:g} N, v0 = {1e3 * v0:.3f} mm/s: {verdict}"
                           f" ({sec:.0f} s)", flush=True)
             count[0] += 1
             return done[key]

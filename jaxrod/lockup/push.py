@@ -118,13 +118,6 @@ def extents(theta, s, wave):
     return helical.sum(-1) * ds, sinusoidal.sum(-1) * ds
 
 
-def _rod3d_options(rod3d: dict) -> dict:
-    """The scene's `Rod3D` keywords: a float64 friction pass unless asked otherwise (in float32
-    the state of a rod climbing the wall became non-finite, measured at μL/ℓ = 1, F_far = 2.5 F₀,
-    θ ≈ 1 rad, with steps of 0.3 and 0.1 of the limit; in float64 the same run forms its helix)."""
-    return {"friction_precision": "float64", **rod3d}
-
-
 def _start(rod, n, imperfection, key, dt_fraction, rod3d):
     """The scene's rod, its straight imperfect start and the step."""
     model = push_model(rod, n, **rod3d)
@@ -171,8 +164,7 @@ def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: 
     `F_max` [N] at `rate` [N/s] (a dead load on the entry, `Rod3D.load_rate`), then, with
     `unload`, falls back to 0 at the same rate. The step is `dt_fraction` × the explicit limit at
     the straight rod (the wall's Hertz contact stiffens as the wall force grows: 0.3 leaves room
-    for many w). Other keywords go to every [`jaxrod.rod3d.Rod3D`][] of the run (default here: a
-    float64 friction pass, `_rod3d_options`).
+    for many w). Other keywords go to every [`jaxrod.rod3d.Rod3D`][] of the run.
 
     Force and not a set pushing speed against a held far end: the rod is axially stiff (EA/F₀ ≈
     6·10⁵ for the reference material at r/ℓ = 0.02), so a push at mm/s raises the entry force by
@@ -190,7 +182,6 @@ def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: 
     (`extents`), `wall_force` (saves, n + 1) [N/m], `stuck_fraction`, `theta` (saves, n + 1)
     [rad]; and the scalars `F0`, `ell`, `n`, `dt`, `result` (the worse [`jaxrod.RESULTS`][] code)."""
     F_max, rate = _check("F_max", F_max, 0.0, False, " N"), _check("rate", rate, 0.0, False, " N/s")
-    rod3d = _rod3d_options(rod3d)
     n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d)
     loads = [(0.0, rate)] + ([(F_max, -rate)] if unload else [])
     rec = _phases(rod, [(push_model(rod, n, F_in=a, rate=r, **rod3d), F_max / rate) for a, r in loads], q, v, dt, n_save, progress)
@@ -209,7 +200,6 @@ def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unlo
     the far load; `u[:, 0]` is how far the far end has moved."""
     speed = _check("speed", speed, 0.0, False, " m/s")
     F_far = _check("F_far", F_far, 0.0, True, " N")
-    rod3d = _rod3d_options(rod3d)
     n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d)
     model = lambda sp: Rod3D(rod, n, control="displacement", speed=sp, far_load=F_far, ends="pinned", **rod3d)
     phases = [(model(speed), duration)] + ([(model(-speed), duration)] if unload else [])
