@@ -1,8 +1,9 @@
 """Reproduce the reference paper's experiments: E2–E5 with the reduced models, E1 and the
 full-model part of E6 with the 3D rod ([`jaxrod.rod3d`][]), and the post-buckling experiment
-(`helix`: the frictionless helix against docs/physics.md §6, a loading–unloading cycle with friction).
+(`helix`: the frictionless helix against docs/physics.md §6, a loading–unloading cycle with friction),
+and beyond it the lock-up of a rod injected into a long channel (`lockup`, docs/physics.md §8).
 
-`jaxrod reproduce {e1,e2,e3,e4,e5,e6,helix,all} [--out DIR] [--quick]` writes, per experiment, PNG
+`jaxrod reproduce {e1,e2,e3,e4,e5,e6,helix,lockup,all} [--out DIR] [--quick]` writes, per experiment, PNG
 figures laid out like a paper's panels and CSV data under `DIR/eN/`, and merges every fitted
 number into `DIR/results.json` (with the settings that made it). Critical values come from the
 boundary search ([`jaxrod.boundary`][]), not from grids; E3 is a map by definition.
@@ -19,7 +20,7 @@ import numpy as np
 
 __all__ = ["reproduce", "EXPERIMENTS"]
 
-EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "e6", "helix")
+EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "e6", "helix", "lockup")
 
 
 def _runners() -> dict:
@@ -28,8 +29,10 @@ def _runners() -> dict:
     from .experiments import e2, e3, e4, e5, e6
     from .experiments.helix import post_buckling
     from .experiments.e1 import e1
+    from .experiments.lockup import lockup
 
-    return {"e1": e1, "e2": e2.e2, "e3": e3.e3, "e4": e4.e4, "e5": e5.e5, "e6": e6.e6, "helix": post_buckling}
+    return {"e1": e1, "e2": e2.e2, "e3": e3.e3, "e4": e4.e4, "e5": e5.e5, "e6": e6.e6, "helix": post_buckling,
+            "lockup": lockup}
 
 
 def reproduce(which, out: str = "results/paper", quick=False, progress: bool = True) -> dict:

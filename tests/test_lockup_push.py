@@ -115,7 +115,8 @@ def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, cap
 def test_lock_up_is_told_by_the_far_end_and_the_entry_force():
     """`locked`: a far end that keeps up with the entry over the last fifth of the push slides; one
     that advances less than half as far has locked; so has a run whose entry force passed ℓ/r F₀
-    (the helix angle no longer small) or became non-finite."""
+    (the helix angle no longer small), even if it became non-finite after that. A run that became
+    non-finite first says nothing (None), whatever its far end did."""
     from jaxrod.lockup.push import locked
 
     push = np.linspace(0.0, 0.3, 101)
@@ -125,4 +126,32 @@ def test_lock_up_is_told_by_the_far_end_and_the_entry_force():
     assert not locked(sliding) and locked(stalled)
     assert locked(dict(sliding, f_in=np.where(push > 0.1, 60.0, 4.0)))  # past ℓ/r = 50 F₀
     assert not locked(dict(sliding, f_in=np.where(push > 0.1, 60.0, 4.0)), cap=100.0)
-    assert locked(dict(sliding, f_in=np.where(push > 0.1, np.nan, 4.0)))
+    assert locked(dict(sliding, f_in=np.where(push > 0.2, np.nan, np.where(push > 0.1, 60.0, 4.0)))) is True
+    assert locked(dict(sliding, f_in=np.where(push > 0.1, np.nan, 4.0))) is None
+    assert locked(dict(stalled, f_in=np.where(push > 0.1, np.nan, 4.0))) is None
+
+
+@pytest.mark.slow  # 20 s: one vmapped and one single compilation
+def test_lanes_are_single_injections_and_a_locked_lane_is_held():
+    """`inject_lanes`: lane k of one vmapped run is `inject` with its own μ and far load (to 1e-6
+    F₀ and 1e-9 m: the run in parts puts its saves on a slightly different step grid); a lane
+    whose entry force passed `cap` at the end of a part has its entry held still from then on
+    (its push stops, to rounding), while the other lanes go on at the set speed."""
+    from jaxrod.lockup.push import inject, inject_lanes, lane
+
+    rod = push_rod(1.0, 0.02, 0.5)
+    F0, _ = units(rod)
+    speed, T = 0.005, 0.4
+    rec = inject_lanes(rod, [0.5, 0.25], [3.0 * F0, 0.5 * F0], speed, T, n=12, n_save=9, chunks=4, cap=2.5,
+                       damping=20.0)
+    single = inject(push_rod(0.5, 0.02, 0.25), 0.5 * F0, speed, T, n=12, n_save=9, damping=20.0)
+    free = lane(rec, 1)
+    assert np.all(rec["result"] == 0) and np.isinf(free["held_from"])
+    np.testing.assert_allclose(free["f_in"], single["f_in"], atol=1e-6)
+    np.testing.assert_allclose(free["u"], single["u"], atol=1e-9)
+    np.testing.assert_allclose(np.diff(free["push"]), speed * np.diff(free["t"]), rtol=1e-6)
+    held = lane(rec, 0)
+    t_hold = held["held_from"]
+    assert 0 < t_hold < T and np.max(held["f_in"][held["t"] <= t_hold + 1e-12]) > 2.5
+    after = held["t"] >= t_hold - 1e-12
+    assert np.ptp(held["push"][after]) < 1e-12

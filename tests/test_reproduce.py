@@ -19,12 +19,13 @@ def results(tmp_path_factory):
 @pytest.mark.slow
 def test_every_experiment_writes_figures_data_and_numbers(results):
     out, res = results
-    assert set(res) == {"e1", "e2", "e3", "e4", "e5", "e6", "helix"}
+    assert set(res) == {"e1", "e2", "e3", "e4", "e5", "e6", "helix", "lockup"}
     assert json.loads((out / "results.json").read_text()).keys() == res.keys()
     for f in ("e2/phase.png", "e3/map.png", "e3/map.json", "e4/e4_critical_load.png", "e4/e4_critical_load.csv",
               "e5/e5_modes.png", "e5/e5_modes.csv", "e6/e6_spectra.png", "e6/e6_spectra.csv",
               "e1/e1_force_displacement.png", "e1/e1_force_displacement.csv", "e1/e1_speed.png", "e1/e1_speed.csv", "e6/e6_full_model.png",
-              "e6/e6_full_model.csv", "helix/helix_post_buckling.png", "helix/helix_post_buckling.csv"):
+              "e6/e6_full_model.csv", "helix/helix_post_buckling.png", "helix/helix_post_buckling.csv",
+              "lockup/lockup.png", "lockup/lockup_lanes.csv", "lockup/lockup_runs.csv"):
         assert (out / f).stat().st_size > 0, f
 
 
@@ -89,6 +90,19 @@ def test_post_buckling_cycle_closes_its_energy_balance(results):
         assert h[mu]["loop_area_J"] > 0, mu
     assert h["mu=0.3"]["dissipated_J"] > h["mu=0.0"]["dissipated_J"]
     assert h["theory"]["onset_chen"] < h["theory"]["onset_mitchell"]
+
+
+@pytest.mark.slow
+def test_lockup_lanes_carry_the_soft_string_beside_them(results):
+    """The lock-up experiment (tiny: 2 μL/ℓ × 2 far loads): every lane ran, and the soft string's
+    F_far,max falls with μL/ℓ for every variant while its lock-up length does not depend on it."""
+    _, res = results
+    lk = res["lockup"]
+    assert lk["lanes"] == 4 and lk["model"] == "rod3d"
+    a, b = lk["cases"]["0.5"], lk["cases"]["1"]
+    for name, v in a["far_max_soft"].items():
+        assert v > b["far_max_soft"][name] > 0, name
+        assert math.isclose(a["lockup_length_soft"][name], b["lockup_length_soft"][name], rel_tol=1e-12), name
 
 
 def test_quick_reproduction_of_e2_and_e3(tmp_path):

@@ -123,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     rp = sub.add_parser("reproduce", help="reproduce the paper's experiments E1-E6 (E1 and E6's full-model part with the 3D rod) "
                         "and the post-buckling helix/hysteresis experiment")
-    rp.add_argument("which", nargs="+", choices=["e1", "e2", "e3", "e4", "e5", "e6", "helix", "all"])
+    rp.add_argument("which", nargs="+", choices=["e1", "e2", "e3", "e4", "e5", "e6", "helix", "lockup", "all"])
     rp.add_argument("--out", default="results/paper")
     rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
     rp.add_argument("--quiet", action="store_true")

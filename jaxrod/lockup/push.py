@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -35,7 +36,7 @@ from ..rod3d import Rod3D, step_limit
 from ..simulate import simulate
 from .closed_forms import force_unit, length_unit
 
-__all__ = ["push_rod", "push_model", "push", "inject", "locked", "extents", "units", "SEGMENTS_PER_WAVE"]
+__all__ = ["push_rod", "push_model", "push", "inject", "inject_lanes", "lane", "locked", "extents", "units", "SEGMENTS_PER_WAVE"]
 
 SEGMENTS_PER_WAVE = 16
 """Default resolution: segments per buckle wavelength at the sinusoidal onset, 2π√(ℓr) (§3). A
@@ -127,29 +128,55 @@ def _start(rod, n, imperfection, key, dt_fraction, rod3d):
     return model.n, q, v, dt_fraction * float(step_limit(model, q))
 
 
-def _phases(rod, phases, q, v, dt, n_save, progress):
+def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None):
     """Run `phases` — (model, duration [s]) in turn, each from where the last left the rod — and
-    record what the scene reports (each phase's first save dropped after the first)."""
+    record what the scene reports (each phase's first save dropped after the first). With
+    `lanes`, each model is a batch (its leaves with a leading lane axis, `inject_lanes`), q and
+    v are shared at the start, and every record but `t`, `phase` and `ts` has a leading lane
+    axis; progress is then one line per phase. `adjust(model, observables)`, if given, makes
+    each phase's model after the first from the last phase's model and observables."""
     F0, ell = units(rod)
     x0 = np.asarray(q.x[:, 0])
-    opts = RunOptions(stop_on_buckle=False, stop_when_stuck=False, save_state=True, progress=progress)
-    parts, result, t0 = [], 0, 0.0
+    opts = RunOptions(stop_on_buckle=False, stop_when_stuck=False, save_state=True, progress=progress and not lanes)
+    parts, result, t0, last, obs = [], 0, 0.0, None, None
+    ax = 1 if lanes else 0  # the records' time axis
     for k, (model, duration) in enumerate(phases):
-        sol = simulate(model, default_for(model, dt), q, v, duration, n_save=n_save, options=opts, throw=False)
+        if adjust is not None and k > 0:
+            model = adjust(last, obs)
+        last = model
+        if lanes:
+            sol = _run_lanes(model, q, v, dt, duration, n_save, opts, shared=k == 0)
+            if progress:
+                print(f"  {t0 + duration:.4g} s of {sum(d for _, d in phases):.4g} s run", flush=True)
+        else:
+            sol = simulate(model, default_for(model, dt), q, v, duration, n_save=n_save, options=opts, throw=False)
         q, v = sol.q_final, sol.v_final
-        ts = np.asarray(sol.ts)
+        ts = np.asarray(sol.ts)[0] if lanes else np.asarray(sol.ts)
         obs = {name: np.asarray(a) for name, a in sol.observables.items()}
-        sl = slice(0 if k == 0 else 1, None)
-        parts.append(dict(t=t0 + ts[sl], phase=np.full(len(ts[sl]), k), reaction=obs["reaction"][sl],
-                          ts=ts[sl], wall_force=obs["normal_force"][sl], theta=obs["theta"][sl],
+        sl = (slice(None),) * ax + (slice(0 if k == 0 else 1, None),)
+        parts.append(dict(t=t0 + ts[sl[-1]], phase=np.full(len(ts[sl[-1]]), k), ts=ts[sl[-1]],
+                          reaction=obs["reaction"][sl], wall_force=obs["normal_force"][sl], theta=obs["theta"][sl],
                           stuck_fraction=obs["stuck_fraction"][sl], u=x0 - np.asarray(sol.q.x[..., 0])[sl]))
         t0 += duration
-        result = max(result, int(sol.result))
-    rec = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
-    s_nodes = np.arange(q.x.shape[0]) * (float(rod.L) / (q.x.shape[0] - 1))
+        result = np.maximum(result, np.asarray(sol.result))
+    rec = {name: np.concatenate([p[name] for p in parts], axis=0 if name in ("t", "phase", "ts") else ax)
+           for name in parts[0]}
+    n = q.x.shape[-2] - 1
+    s_nodes = np.arange(n + 1) * (float(rod.L) / n)
     rec["helical"], rec["sinusoidal"] = extents(rec["theta"], s_nodes, _wave(rod))
-    rec.update(push=rec["u"][:, -1], F0=F0, ell=ell, r=float(rod.R), n=q.x.shape[0] - 1, dt=dt, result=result)
+    rec.update(push=rec["u"][..., -1], F0=F0, ell=ell, r=float(rod.R), n=n, dt=dt,
+               result=result if lanes else int(result))
     return rec
+
+
+@eqx.filter_jit
+def _run_lanes(models, q, v, dt, duration, n_save, opts, shared):
+    """One compiled, vmapped run of a batch of models from (q, v), shared by every lane or one
+    per lane."""
+    def one(model, q, v):
+        return simulate(model, default_for(model, dt), q, v, duration, n_save=n_save, options=opts, throw=False)
+
+    return eqx.filter_vmap(one, in_axes=(eqx.if_array(0), None if shared else 0, None if shared else 0))(models, q, v)
 
 
 def _forces(rec, F_in, F_far):
@@ -207,16 +234,76 @@ def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unlo
     return _forces(rec, rec["reaction"][:, 1], np.full(len(rec["t"]), F_far))
 
 
-def locked(rec: dict, cap: float | None = None) -> bool:
+def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float, *, n: int | None = None,
+                 n_save: int = 101, chunks: int = 20, cap: float | None = None, imperfection: float = 1e-3,
+                 key=None, dt_fraction: float = 0.3, progress: bool = False, **rod3d) -> dict:
+    """`inject` for many cases as one compiled, vmapped run: lane k is the rod and channel of
+    `rod` (its L, r and material) with the friction coefficient `mus[k]` (static = dynamic, so
+    μL/ℓ varies across lanes) against the far load `far_loads[k]` [N]; every lane starts from
+    the same imperfect straight rod and takes the same steps. The push runs in `chunks` equal
+    parts (one program; a progress line after each), `n_save` saves in all. A lane whose entry
+    force has passed `cap` [F₀] (default ℓ/r, as `locked`) at the end of a part is locked up:
+    its entry is held still from then on (the rod has no contact with itself, so pushing on
+    would wind the helix through itself).
+
+    **Returns:** as `inject`, with a leading lane axis on every record but `t`, `phase`, `ts`;
+    `result` per lane, `mu`, and `held_from` [s] (when each lane's entry was stopped; inf if
+    never)."""
+    speed = _check("speed", speed, 0.0, False, " m/s")
+    mus, far_loads = np.broadcast_arrays(np.asarray(mus, float), np.asarray(far_loads, float))
+    if mus.ndim != 1 or mus.size == 0:
+        raise ValueError(f"mus = {mus!r} is invalid: expected a non-empty 1D array of friction coefficients.")
+    for name, a, closed in (("mus", mus, False), ("far_loads", far_loads, True)):
+        for x in a:
+            _check(name, x, 0.0, closed)
+    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d)
+    F0, ell = units(rod)
+    cap = ell / float(rod.R) if cap is None else _check("cap", cap, 0.0, False)
+
+    def model(mu, F):
+        r = eqx.tree_at(lambda r: (r.mu_s, r.mu_d), rod, (mu, mu))
+        return Rod3D(r, n, control="displacement", speed=speed, far_load=F, ends="pinned", **rod3d)
+
+    models = eqx.filter_vmap(model)(jnp.asarray(mus), jnp.asarray(far_loads))
+    chunks = max(1, int(chunks))
+    held_from = np.full(mus.shape, np.inf)
+    elapsed = [0.0]
+
+    def hold_locked(models, obs):
+        elapsed[0] += duration / chunks
+        over = np.max(np.asarray(obs["reaction"])[..., 1], axis=-1) / F0 > cap
+        held_from[over & ~np.isfinite(held_from)] = elapsed[0]
+        return eqx.tree_at(lambda m: m.speed, models, jnp.where(jnp.asarray(over), 0.0, models.speed))
+
+    per = max(2, math.ceil((n_save - 1) / chunks) + 1)
+    rec = _phases(rod, [(models, duration / chunks)] * chunks, q, v, dt, per, progress, lanes=True,
+                  adjust=hold_locked)
+    rec["phase"] = np.zeros_like(rec["phase"])  # one loading phase, run in parts
+    rec.update(mu=mus, held_from=held_from)
+    return _forces(rec, rec["reaction"][..., 1], far_loads[:, None] * np.ones(len(rec["t"])))
+
+
+def lane(rec: dict, k: int) -> dict:
+    """Lane `k` of an `inject_lanes` record, as an `inject` record."""
+    shared = ("t", "phase", "ts", "F0", "ell", "r", "n", "dt")
+    return {name: a if name in shared else a[k] for name, a in rec.items()}
+
+
+def locked(rec: dict, cap: float | None = None) -> bool | None:
     """Whether an `inject` run locked up: over the last fifth of the push its far end advanced
-    less than half as far as its entry, its entry force passed `cap` [F₀] (default ℓ/r, half of
-    2EI/r², where the helix angle stops being small and the run leaves the scene's range), or a
-    force became non-finite."""
+    less than half as far as its entry, or its entry force passed `cap` [F₀] (default ℓ/r, half
+    of 2EI/r², where the helix angle stops being small and the run leaves the scene's range).
+    `None` for a run whose force became non-finite before passing `cap`: a failed run says
+    nothing about lock-up."""
     cap = rec["ell"] / rec["r"] if cap is None else cap
     loading = rec["phase"] == 0
     push, far, f_in = rec["push"][loading], rec["u"][loading, 0], rec["f_in"][loading]
+    finite = np.isfinite(f_in)
+    first_bad = len(f_in) if finite.all() else int(np.argmin(finite))
+    if np.any(f_in[:first_bad] > cap):
+        return True
+    if first_bad < len(f_in) or not np.all(np.isfinite(far)):
+        return None
     tail = push >= 0.8 * push[-1]
     advance_in, advance_far = push[tail][-1] - push[tail][0], far[tail][-1] - far[tail][0]
-    if not np.all(np.isfinite(f_in)):
-        return True
-    return bool(np.max(f_in) > cap) or not advance_far >= 0.5 * advance_in
+    return not advance_far >= 0.5 * advance_in

@@ -43,7 +43,8 @@ def run(X, f_far, done):
     t = time.perf_counter()
     rec = inject(rod, f_far * F0, SPEED, push / SPEED, n_save=201, damping=DAMPING)
     loading = rec["phase"] == 0
-    row = dict(mu_L_over_ell=f"{X:g}", far_load_over_F0=f"{f_far:.6g}", locked=int(locked(rec)),
+    lk = locked(rec)  # None: the run failed (non-finite) before telling
+    row = dict(mu_L_over_ell=f"{X:g}", far_load_over_F0=f"{f_far:.6g}", locked="" if lk is None else int(lk),
                entry_force_max_over_F0=float(max(rec["f_in"][loading])), far_advance=float(rec["u"][loading, 0][-1]),
                push=push, n=int(rec["n"]), result=int(rec["result"]), wall_s=time.perf_counter() - t)
     path = _runs(X)
@@ -72,12 +73,18 @@ def main():
     out = []
     for k, X in enumerate(a.muL):
         lo, hi = a.bracket[2 * k], a.bracket[2 * k + 1]
-        if int(run(X, lo, done)["locked"]) or not int(run(X, hi, done)["locked"]):
-            print(f"muL/ell = {X:g}: [{lo:g}, {hi:g}] F0 does not bracket the lock-up; skipped", flush=True)
+        ends = [run(X, lo, done)["locked"], run(X, hi, done)["locked"]]
+        if "" in ends or int(ends[0]) or not int(ends[1]):
+            print(f"muL/ell = {X:g}: [{lo:g}, {hi:g}] F0 does not bracket the lock-up (or a run failed); skipped",
+                  flush=True)
             continue
         while hi / lo > 1 + a.rtol:
             mid = math.sqrt(lo * hi)
-            lo, hi = (mid, hi) if not int(run(X, mid, done)["locked"]) else (lo, mid)
+            label = run(X, mid, done)["locked"]
+            if label == "":  # a failed run tells nothing: the bracket so far is the result
+                print(f"muL/ell = {X:g}: the run at {mid:.4g} F0 failed; stopped at [{lo:g}, {hi:g}]", flush=True)
+                break
+            lo, hi = (mid, hi) if not int(label) else (lo, mid)
         rod = push_rod(X, 0.02, 0.5)
         F0, _ = units(rod)
         geometry = (float(rod.L), float(rod.EI), float(rod.rho * rod.g), float(rod.R), 0.5)
