@@ -155,3 +155,28 @@ def test_lanes_are_single_injections_and_a_locked_lane_is_held():
     assert 0 < t_hold < T and np.max(held["f_in"][held["t"] <= t_hold + 1e-12]) > 2.5
     after = held["t"] >= t_hold - 1e-12
     assert np.ptp(held["push"][after]) < 1e-12
+
+
+@pytest.mark.slow  # 40 s
+def test_past_lock_up_the_far_end_holds_still():
+    """μL/ℓ = 1 against 5 F₀ (above F_far,max: 3.66–4.00 F₀ for the soft string, [4.0, 4.57] for
+    the 3D rod at 74 segments), the entry held once its force has passed 20 F₀ (`inject_lanes`'s
+    cap): the rod wound into a helix along its whole length, the far end under its load, and
+    the entry force locked in come to rest and stay there — static friction holds them exactly
+    (a stuck contact has zero velocity in the projected scheme): within a save (0.5 s) of the
+    hold the far end settles (0.33 mm measured, under 1 mm), then it does not move by 1 µm (the
+    push, 5 mm/s, moved the entry 2.5 mm per save) and the entry force stays above 20 F₀.
+    (Before the hold the far end does not stay still: at 45–48 F₀ it advanced 15 mm in a burst
+    while the entry advanced 20 mm, docs/physics.md §8.)"""
+    from jaxrod.lockup.push import inject_lanes, lane
+
+    rod = push_rod(1.0, 0.02, 0.5)
+    F0, _ = units(rod)
+    rec = inject_lanes(rod, [0.5], [5.0 * F0], 0.005, 24.0, n_save=49, chunks=8, cap=20.0, damping=20.0)
+    r = lane(rec, 0)
+    assert r["result"] == 0 and 0 < r["held_from"] <= 21.0
+    after = r["t"] >= r["held_from"]
+    assert np.ptp(r["push"][after]) < 1e-9 and r["push"][after][0] > 0.05
+    far = r["u"][after, 0]
+    assert abs(far[1] - far[0]) < 1e-3 and np.ptp(far[1:]) < 1e-6
+    assert np.min(r["f_in"][after]) > 20.0

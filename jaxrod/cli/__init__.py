@@ -122,7 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
     cl.set_defaults(func=_cmd_critical_load)
 
     rp = sub.add_parser("reproduce", help="reproduce the paper's experiments E1-E6 (E1 and E6's full-model part with the 3D rod) "
-                        "and the post-buckling helix/hysteresis experiment")
+                        "and the post-buckling helix/hysteresis experiment ('all'); lock-up by name")
     rp.add_argument("which", nargs="+", choices=["e1", "e2", "e3", "e4", "e5", "e6", "helix", "lockup", "all"])
     rp.add_argument("--out", default="results/paper")
     rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")

@@ -9,9 +9,11 @@ def _cmd_reproduce(args) -> int:
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    from ..reproduce import reproduce
+    from ..reproduce import PAPER, reproduce
 
-    which = ["all"] if "all" in args.which else args.which
+    which = args.which
+    if "all" in which:  # the paper's, and lockup if named beside it
+        which = list(PAPER) + [w for w in which if w not in PAPER and w != "all"]
     try:
         res = reproduce(which, args.out, quick=args.quick, progress=not args.quiet)
     except ValueError as err:

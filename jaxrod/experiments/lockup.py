@@ -154,7 +154,7 @@ def _figure(out, rod, rows, res, S):
     a.set(xlabel="entry force / F₀ (last fifth of the push; x: locked)", ylabel="far load / F₀",
           title="3D rod (points) and soft string (— Chen, -- Wu & Juvkam-Wold)")
     a.legend(fontsize=8)
-    X = np.linspace(0.1, 6.0, 300)
+    X = np.linspace(0.8 * min(S["X"]), 6.0, 300)
     for onset, law in VARIANTS:
         fm = [float(chain.far_force_max(rod.L, EI, w, r, x * ell / float(rod.L), helical_onset=onset,
                                         helical_law=law)) / F0 for x in X]
@@ -169,7 +169,9 @@ def _figure(out, rod, rows, res, S):
         elif hi is not None:
             b.plot(x, hi, "kv")
     b.plot([], [], "k-", lw=3, label="3D rod: largest sliding – smallest locked")
-    b.set(xlabel="μL/ℓ", ylabel="F_far,max / F₀", ylim=(0, None), title="largest force reaching the far end")
+    top = max([v for c in res["cases"].values() for v in c["far_max_3d_bracket"] if v is not None]
+              + [v for c in res["cases"].values() for v in c["far_max_soft"].values()])
+    b.set(xlabel="μL/ℓ", ylabel="F_far,max / F₀", ylim=(0, 1.2 * top), title="largest force reaching the far end")
     b.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "lockup.png"), dpi=130)
