@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import theory
+from .._results import RESULTS
 from ..params import RodChannel
 from ..integrators import default_for
 from ..integrators.base import RunOptions
@@ -198,7 +199,12 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
             v0s = np.geomspace(lo, hi, grid)
             states = jax.vmap(lambda v0: model.initial_state(F0 + dF, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
             dt = 0.5 * step_limit(model, _first(states))
-            b = np.asarray(_batched(model, states, t1, 11, dt, 0.5, True, True).buckled)
+            sol = _batched(model, states, t1, 11, dt, 0.5, True, True)
+            failed = np.asarray(sol.result) != 0
+            if failed.any():  # a failed run is not a label: stop rather than count it as stable
+                raise RuntimeError(f"cross-check ΔF = {dF} N: the 3D runs at v0 = {v0s[failed].tolist()} m/s failed "
+                                   f"({RESULTS.describe(np.asarray(sol.result)[failed][0])}).")
+            b = np.asarray(sol.buckled)
             tested.update(zip(v0s.tolist(), b.tolist()))
             if progress:
                 print(f"  cross-check ΔF = {dF} N ({friction_at}), round {k}: buckled {b.astype(int).tolist()}", flush=True)
