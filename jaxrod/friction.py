@@ -109,12 +109,12 @@ class Coulomb(AbstractFriction):
         friction pass's default) from c ≈ 1e-10 |u|/|W|: the state became non-finite."""
         W11, W12, W22 = W
 
-        def adj(lam, b1, b2):  # adj(W + λI) b and det(W + λI): (W + λI)⁻¹ b = adj b / det
-            a11, a22 = W11 + lam, W22 + lam
-            return (a22 * b1 - W12 * b2, a11 * b2 - W12 * b1), a11 * a22 - W12 * W12
+        def adj(W, lam, b1, b2):  # adj(W + λI) b and det(W + λI): (W + λI)⁻¹ b = adj b / det
+            a11, a22 = W[0] + lam, W[2] + lam
+            return (a22 * b1 - W[1] * b2, a11 * b2 - W[1] * b1), a11 * a22 - W[1] * W[1]
 
         zero = jnp.zeros_like(W11)
-        (y1, y2), det = adj(zero, *u)
+        (y1, y2), det = adj(W, zero, *u)
         p_stick = (-y1 / det, -y2 / det)
         sticks = safe_hypot(*p_stick) <= bound_stick
         slips = ~sticks & (bound_slip > 0)
@@ -126,8 +126,8 @@ class Coulomb(AbstractFriction):
         norm = jnp.where(slips, safe_hypot(*u), 1.0)
         scale = c / norm  # 1/λ_max
         us = (jnp.where(slips, u[0] / norm, 1.0), jnp.where(slips, u[1] / norm, 0.0))  # û
-        w11, w12, w22 = W11 * scale, W12 * scale, W22 * scale  # W'
-        lo = jnp.maximum(0.0, 1.0 - (w11 + w22))
+        Ws = (W11 * scale, W12 * scale, W22 * scale)  # W'
+        lo = jnp.maximum(0.0, 1.0 - (Ws[0] + Ws[2]))
         t, iterations = lo, 8
         if guess is not None:
             g1, g2 = guess
@@ -135,16 +135,12 @@ class Coulomb(AbstractFriction):
             est = -((u[0] + W11 * g1 + W12 * g2) * g1 + (u[1] + W12 * g1 + W22 * g2) * g2) / jnp.where(gg > 0, gg, 1.0)
             t, iterations = jnp.where(gg > 0, jnp.clip(est * scale, lo, 1.0), lo), 3
 
-        def adj_s(t, b1, b2):  # adj(W' + tI) b and det(W' + tI)
-            a11, a22 = w11 + t, w22 + t
-            return (a22 * b1 - w12 * b2, a11 * b2 - w12 * b1), a11 * a22 - w12 * w12
-
         for _ in range(iterations):
-            (y1, y2), det = adj_s(t, *us)
-            (z1, z2), _ = adj_s(t, y1, y2)
+            (y1, y2), det = adj(Ws, t, *us)
+            (z1, z2), _ = adj(Ws, t, y1, y2)
             yy = y1 * y1 + y2 * y2
             t = jnp.clip(t - (det * yy - yy * jnp.sqrt(yy)) / (y1 * z1 + y2 * z2), lo, 1.0)
-        (y1, y2), _ = adj_s(t, *us)
+        (y1, y2), _ = adj(Ws, t, *us)
         k = c / safe_hypot(y1, y2)  # onto |p| = c
         return tuple(jnp.where(sticks, ps, jnp.where(slips, -k * y, 0.0)) for ps, y in zip(p_stick, (y1, y2))), sticks
 

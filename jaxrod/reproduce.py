@@ -44,7 +44,8 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
     `True` (coarser, fewer realizations: minutes) or `"tiny"` (the test suite's structure check)."""
     import jax
 
-    names = PAPER if which in ("all", ["all"], ("all",)) else tuple(which)
+    which = [which] if isinstance(which, str) else list(which)
+    names = tuple(dict.fromkeys(n for w in which for n in (PAPER if w == "all" else (w,))))  # "all" and others
     bad = [w for w in names if w not in EXPERIMENTS]
     if bad:
         raise ValueError(f"unknown experiment(s) {bad}: expected {EXPERIMENTS} or 'all'.")

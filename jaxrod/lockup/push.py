@@ -131,21 +131,22 @@ def _start(rod, n, imperfection, key, dt_fraction, rod3d):
 def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None):
     """Run `phases` — (model, duration [s]) in turn, each from where the last left the rod — and
     record what the scene reports (each phase's first save dropped after the first). With
-    `lanes`, each model is a batch (its leaves with a leading lane axis, `inject_lanes`), q and
-    v are shared at the start, and every record but `t`, `phase` and `ts` has a leading lane
-    axis; progress is then one line per phase. `adjust(model, observables)`, if given, makes
-    each phase's model after the first from the last phase's model and observables."""
+    `lanes`, each model is a batch (its leaves with a leading lane axis, `inject_lanes`), and so
+    are q and v; every record but `t`, `phase` and `ts` has a leading lane axis; progress is then
+    one line per phase. `adjust(model, observables, t)`, if given, makes each phase's model after
+    the first from the last phase's model and observables, at the time t [s] it starts."""
     F0, ell = units(rod)
-    x0 = np.asarray(q.x[:, 0])
+    x0 = np.asarray(q.x[..., 0])
+    x0 = x0[0] if lanes else x0  # every lane starts from the same rod
     opts = RunOptions(stop_on_buckle=False, stop_when_stuck=False, save_state=True, progress=progress and not lanes)
     parts, result, t0, last, obs = [], 0, 0.0, None, None
     ax = 1 if lanes else 0  # the records' time axis
     for k, (model, duration) in enumerate(phases):
         if adjust is not None and k > 0:
-            model = adjust(last, obs)
+            model = adjust(last, obs, t0)
         last = model
         if lanes:
-            sol = _run_lanes(model, q, v, dt, duration, n_save, opts, shared=k == 0)
+            sol = _run_lanes(model, q, v, dt, duration, n_save, opts)
             if progress:
                 print(f"  {t0 + duration:.4g} s of {sum(d for _, d in phases):.4g} s run", flush=True)
         else:
@@ -170,13 +171,12 @@ def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None):
 
 
 @eqx.filter_jit
-def _run_lanes(models, q, v, dt, duration, n_save, opts, shared):
-    """One compiled, vmapped run of a batch of models from (q, v), shared by every lane or one
-    per lane."""
+def _run_lanes(models, q, v, dt, duration, n_save, opts):
+    """One compiled, vmapped run of a batch of models, each lane from its own (q, v)."""
     def one(model, q, v):
         return simulate(model, default_for(model, dt), q, v, duration, n_save=n_save, options=opts, throw=False)
 
-    return eqx.filter_vmap(one, in_axes=(eqx.if_array(0), None if shared else 0, None if shared else 0))(models, q, v)
+    return eqx.filter_vmap(one, in_axes=(eqx.if_array(0), 0, 0))(models, q, v)
 
 
 def _forces(rec, F_in, F_far):
@@ -267,15 +267,14 @@ def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float,
     models = eqx.filter_vmap(model)(jnp.asarray(mus), jnp.asarray(far_loads))
     chunks = max(1, int(chunks))
     held_from = np.full(mus.shape, np.inf)
-    elapsed = [0.0]
 
-    def hold_locked(models, obs):
-        elapsed[0] += duration / chunks
+    def hold_locked(models, obs, t):
         over = np.max(np.asarray(obs["reaction"])[..., 1], axis=-1) / F0 > cap
-        held_from[over & ~np.isfinite(held_from)] = elapsed[0]
+        held_from[over & ~np.isfinite(held_from)] = t
         return eqx.tree_at(lambda m: m.speed, models, jnp.where(jnp.asarray(over), 0.0, models.speed))
 
     per = max(2, math.ceil((n_save - 1) / chunks) + 1)
+    q, v = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (mus.size,) + a.shape), (q, v))  # one per lane
     rec = _phases(rod, [(models, duration / chunks)] * chunks, q, v, dt, per, progress, lanes=True,
                   adjust=hold_locked)
     rec["phase"] = np.zeros_like(rec["phase"])  # one loading phase, run in parts
