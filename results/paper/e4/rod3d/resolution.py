@@ -1,7 +1,7 @@
 """E4 with the 3D rod on this CPU: ΔF* of a sine (E4 A, 15 mm/s, mode 6) and a random velocity
 (E4 B, ±15 mm/s on the scene's 500-segment noise grid, realization 0 of `critical_load_curve`'s
-keys) at the segment counts given, by label bisection to rtol 1e-2 in a bracket a factor 8 either
-side of the field model's ΔF* (first and last runs are its ends). Every point is appended to
+keys, or `--realization r`) at the segment counts given, by label bisection to rtol 1e-2 in a
+bracket a factor `--width` (8) either side of the field model's ΔF* (first and last runs are its ends). Every point is appended to
 `resolution.csv` as it finishes (commit, date, wall time with compilation).
 
     python results/paper/e4/rod3d/resolution.py --mu 0.05 --cases A B --n 60 120 240
@@ -38,8 +38,8 @@ def _commit():
         return ""
 
 
-def point(case, mu, model, n, bracket, method):
-    key = jax.random.fold_in(jax.random.key(0), 0)  # critical_load_curve's realization 0 of μ index 0
+def point(case, mu, model, n, bracket, method, realization=0):
+    key = jax.random.fold_in(jax.random.key(0), realization)  # critical_load_curve's realization r of μ index 0
     rod = jr.RodChannel.reference(mu=mu)
     t0 = time.perf_counter()
     r, _ = bd.critical_load(rod, 15e-3, model=model, perturbation=PERTURBATION[case], key=key, n=n, bracket=bracket,
@@ -53,6 +53,8 @@ def main():
     p.add_argument("--mu", type=float, default=0.05)
     p.add_argument("--cases", nargs="+", choices=("A", "B"), default=["A", "B"])
     p.add_argument("--n", type=int, nargs="+", default=[60, 120, 240])
+    p.add_argument("--realization", type=int, default=0, help="the random velocity's realization r (key fold_in(key(0), r))")
+    p.add_argument("--width", type=float, default=8.0, help="the 3D bracket: the field model's ΔF* divided and multiplied by it")
     a = p.parse_args()
     path = os.path.join(HERE, "resolution.csv")
     new = not os.path.exists(path)
@@ -61,16 +63,16 @@ def main():
         if new:
             w.writeheader()
         for case in a.cases:
-            field, sec = point(case, a.mu, "field", None, (0.01, 100.0), None)
+            field, sec = point(case, a.mu, "field", None, (0.01, 100.0), None, a.realization)
             f = float(field.root)
             print(f"E4 {case}, mu = {a.mu:g}: field model dF* = {f:.4g} N ({sec:.0f} s)", flush=True)
-            rows = [dict(case=case, mu=a.mu, realization=0, model="field", n="", dF_star=f, lo=float(field.lo),
+            rows = [dict(case=case, mu=a.mu, realization=a.realization, model="field", n="", dF_star=f, lo=float(field.lo),
                          hi=float(field.hi), runs=int(field.evaluations), result=int(field.result), wall_s=round(sec, 1))]
             for n in a.n:
-                r, sec = point(case, a.mu, "rod3d", n, (f / 8, 8 * f), "bisection")
+                r, sec = point(case, a.mu, "rod3d", n, (f / a.width, a.width * f), "bisection", a.realization)
                 print(f"  3D rod, {n} segments: dF* = {float(r.root):.4g} N in [{float(r.lo):.4g}, {float(r.hi):.4g}], "
                       f"{int(r.evaluations)} runs, result {int(r.result)}, {sec:.0f} s", flush=True)
-                rows.append(dict(case=case, mu=a.mu, realization=0, model="rod3d", n=n, dF_star=float(r.root),
+                rows.append(dict(case=case, mu=a.mu, realization=a.realization, model="rod3d", n=n, dF_star=float(r.root),
                                  lo=float(r.lo), hi=float(r.hi), runs=int(r.evaluations), result=int(r.result),
                                  wall_s=round(sec, 1)))
                 for row in rows:
