@@ -37,22 +37,39 @@ def _runners() -> dict:
             "lockup": lockup}
 
 
-def reproduce(which, out: str = "results/paper", quick=False, progress: bool = True) -> dict:
+def _runners_3d(n) -> dict:
+    """The parts run with the 3D rod (`model="rod3d"`): `jaxrod.experiments.paper3d`."""
+    from .experiments import paper3d
+
+    return {name: (lambda out, quick, progress, f=f: f(out, quick, progress, n=n))
+            for name, f in (("e3", paper3d.e3), ("e4", paper3d.e4), ("e6", paper3d.e6c))}
+
+
+def reproduce(which, out: str = "results/paper", quick=False, progress: bool = True, model: str = "field",
+              n: int | None = None) -> dict:
     """Run the experiments in `which` (names from `EXPERIMENTS`, or `"all"`: those of `PAPER`;
     `lockup`, beyond the paper and hours long in its full setting, only by name), write figures, CSV
     and `results.json` under `out`; returns the dict written. `quick`: `False` (the full run),
-    `True` (coarser, fewer realizations: minutes) or `"tiny"` (the test suite's structure check)."""
+    `True` (coarser, fewer realizations: minutes) or `"tiny"` (the test suite's structure check).
+    `model="rod3d"`: E3, E4 and E6 (its part C) with the 3D rod of `n` segments (default 500;
+    [`jaxrod.experiments.paper3d`][]), recorded as `e3_rod3d`, ... in `results.json`."""
     import jax
 
     which = [which] if isinstance(which, str) else list(which)
-    names = tuple(dict.fromkeys(n for w in which for n in (PAPER if w == "all" else (w,))))  # "all" and others
-    bad = [w for w in names if w not in EXPERIMENTS]
+    if model not in ("field", "rod3d"):
+        raise ValueError(f"model = {model!r} is invalid: expected 'field' or 'rod3d'.")
+    if n is not None and not (isinstance(n, int) and n >= 4):
+        raise ValueError(f"n = {n!r} is invalid: expected an int >= 4 (segments of the 3D rod).")
+    names = tuple(dict.fromkeys(x for w in which for x in (PAPER if w == "all" else (w,))))  # "all" and others
+    allowed = EXPERIMENTS if model == "field" else tuple(_runners_3d(n))
+    bad = [w for w in names if w not in allowed]
     if bad:
-        raise ValueError(f"unknown experiment(s) {bad}: expected {EXPERIMENTS} or 'all'.")
+        raise ValueError(f"unknown experiment(s) {bad} for model {model!r}: expected {allowed}"
+                         + (" or 'all'." if model == "field" else "."))
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, "results.json")
     results = {}
-    fns = _runners()
+    fns = _runners() if model == "field" else _runners_3d(n)
     for name in names:
         sub = os.path.join(out, name)
         os.makedirs(sub, exist_ok=True)
@@ -64,10 +81,11 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
         r["quick"] = quick
         r["jax"] = jax.__version__
         r["devices"] = jax.local_device_count()
-        results[name] = r
+        entry = name if model == "field" else f"{name}_rod3d"
+        results[entry] = r
         # merge into what is on disk now (another run may have written other experiments since)
         on_disk = json.load(open(path)) if os.path.exists(path) else {}
-        on_disk[name] = r
+        on_disk[entry] = r
         tmp = f"{path}.{os.getpid()}.tmp"
         with open(tmp, "w") as fh:
             json.dump(on_disk, fh, indent=1, default=_json_default)

@@ -115,3 +115,30 @@ def test_bisect_stops_at_a_failed_run():
         return None if len(calls) == 3 else v > 1.3
 
     assert _bisect(label, 1.0, 0.04, 0.01, 40) is None and len(calls) == 3
+
+
+def _predicted_against_wide(n, dF):
+    """E3's 3D search from the field model's v₀* (±4 %) and plain label bisection of the same
+    runs from [1e-4, 1] m/s: two brackets of one monotone label, so both hold the boundary."""
+    import jaxrod as jr
+    from jaxrod.experiments.e3_rod3d import boundary_3d
+
+    pred = boundary_3d([dF], n=n, rtol=0.01, t1=0.4, progress=False)["points"][0]
+    wide, _ = jr.boundary.critical_velocity(jr.RodChannel.reference(0.3), dF, model="rod3d", n=n, method="bisection",
+                                            rtol=1e-2, t1=0.4, sensitivities=())
+    lo, hi = pred["bracket"]
+    assert int(wide.result) == 0 and hi / lo - 1 <= 0.01
+    assert max(lo, float(wide.lo)) <= min(hi, float(wide.hi))  # the brackets overlap
+    return pred["runs"], int(wide.evaluations)
+
+
+@pytest.mark.slow  # 60 segments: 6 + 12 runs (~1.5 min)
+def test_predicted_3d_search_agrees_with_wide_bisection_at_60_segments():
+    runs, wide = _predicted_against_wide(60, 20.0)
+    assert runs <= 10 and runs < wide
+
+
+@pytest.mark.slow  # 500 segments: about 20 runs (~15 min on one core)
+def test_predicted_3d_search_agrees_with_wide_bisection_at_500_segments():
+    runs, wide = _predicted_against_wide(500, 20.0)
+    assert runs <= 10 and runs < wide

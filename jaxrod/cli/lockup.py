@@ -50,6 +50,8 @@ def _cmd_lockup(args) -> int:
         "soft_string_entry_force_over_F0": soft,
         "result": RESULTS.describe(r["result"]),
     }
+    if args.unload:
+        summary["unloading"] = _unloading(r, ell)
     os.makedirs(args.out, exist_ok=True)
     write_csv(os.path.join(args.out, "lockup.csv"), rows)
     with open(os.path.join(args.out, "lockup.json"), "w") as fh:
@@ -64,8 +66,31 @@ def _cmd_lockup(args) -> int:
               f"sinusoidal {summary['sinusoidal_over_ell_end']:.2f} ell")
         print("  soft string (onset / helical law): " + ", ".join(
             f"{k} {v:.3f}" if math.isfinite(v) else f"{k} locked up" for k, v in soft.items()))
+        if args.unload:
+            u = summary["unloading"]
+            print(f"  pulled back: entry force over the last fifth {u['entry_force_over_F0_last_fifth'][0]:.3f}-"
+                  f"{u['entry_force_over_F0_last_fifth'][1]:.3f} F0; at the end helical {u['helical_over_ell_end']:.2f} ell, "
+                  f"sinusoidal {u['sinusoidal_over_ell_end']:.2f} ell, far end moved {1e3 * u['far_end_moved_m']:.1f} mm")
         print(f"  result: {summary['result']}; wrote {args.out}/lockup.csv, lockup.json, lockup.png")
     return 0 if r["result"] == 0 else 1
+
+
+def _unloading(r, ell) -> dict:
+    """What the pull-back shows: the entry force over its last fifth (the rod sliding back out
+    against friction and the far load), and what is left at its end — the extents, the largest
+    wall force, how far the far end ended up from where it started (> 0: toward the far end)."""
+    import numpy as np
+
+    back = r["phase"] == 1
+    top = float(np.max(r["push"]))
+    tail = back & (r["push"] <= 0.2 * top)
+    last = np.flatnonzero(back)[-1]
+    return {"entry_force_over_F0_last_fifth": [float(np.min(r["f_in"][tail])), float(np.max(r["f_in"][tail]))],
+            "entry_force_over_F0_end": float(r["f_in"][last]),
+            "helical_over_ell_end": float(r["helical"][last] / ell),
+            "sinusoidal_over_ell_end": float(r["sinusoidal"][last] / ell),
+            "far_end_moved_m": float(r["u"][last, 0] - r["u"][0, 0]),
+            "push_end_m": float(r["push"][last])}
 
 
 def _plot(r, summary, path):

@@ -12,7 +12,7 @@ def _cmd_reproduce(args) -> int:
     from ..reproduce import reproduce
 
     try:
-        res = reproduce(args.which, args.out, quick=args.quick, progress=not args.quiet)
+        res = reproduce(args.which, args.out, quick=args.quick, progress=not args.quiet, model=args.model, n=args.n)
     except ValueError as err:
         _fail(str(err))
     print(f"wrote {args.out}/results.json and figures under {args.out}/<experiment>/")

@@ -1,0 +1,252 @@
+"""The paper's experiments with the paper's model: the 3D rod ([`jaxrod.rod3d`][]) at the paper's
+500 segments for E3, E4 A/B and E6C, beside the field model (`jaxrod reproduce e3 e4 e6
+--model rod3d [--n N]`; docs/paper.md, "The experiments with the 3D rod").
+
+Every search is label bisection of the 3D rod's runs (a run stops at its label: stuck, or past
+the buckling threshold) to a relative bracket of 1 %, started from the field model's answer:
+
+- **E3**: v₀*(ΔF) of the sine mode 6, μ = 0.3, a bracket ±4 % around the field model's v₀*,
+  widened until two runs hold it (`e3_rod3d.boundary_3d`); the exponent of v₀* ∝ ΔF^p by least
+  squares in log–log over all the loads, fixed before any run, beside the paper's −0.77.
+- **E4**: ΔF*(μ) of the sine 15 mm/s (A) and of random velocities ±15 mm/s (B, realization r:
+  key `fold_in(key(0), r)`), in a bracket a factor `WIDTH` either side of the field model's
+  ΔF* for the same perturbation (499 nodes, the random grid resolved); horizon 2 s.
+- **E6C**: the random position (forces ±2 N/m for 1 ms, key 6 as `jaxrod reproduce e6`) at
+  μ = 0.9: ΔF* (horizon 0.5 s, bracket a factor 4), then runs at 1.05 ΔF* and at the paper's
+  40 N, and the largest modes of θ at the stop with their shares of the power of 40 modes.
+
+A sweep never loses finished work: E3 appends every run to `e3/rod3d_runs.csv` and replays it,
+E4 and E6C append every finished point to their CSV (with wall time, commit and date) and skip
+the points already there when the command runs again. E5 with the 3D rod is not a part: per μ
+it needs the dominant mode of about 10 buckled runs at 1.05 ΔF* of each realization, so about
+10 searches and 20 runs at 500 segments (about 6 h per μ on this CPU by the E4 figures).
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import math
+import os
+import subprocess
+import time
+
+import numpy as np
+
+from ..output import subplots, write_csv
+
+__all__ = ["e3", "e4", "e4_point", "e6c", "SIZES", "WIDTH", "PAPER_E3_EXPONENT"]
+
+WIDTH = 1.5
+PAPER_E3_EXPONENT = -0.77  # ../shared/PHYSICS.md §5 (results/paper/paper_numbers.json)
+SIZES = {
+    False: dict(n=500, loads=(0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 40.0, 60.0), mus=(0.05, 0.1, 0.3, 0.5, 1.0),
+                realizations=4, t1_e3=0.4, t1_e4=2.0, t1_e6=0.5, rtol=1e-2),
+    True: dict(n=60, loads=(1.0, 5.0, 20.0, 60.0), mus=(0.05, 0.3), realizations=1, t1_e3=0.4, t1_e4=2.0,
+               t1_e6=0.5, rtol=1e-2),
+    "tiny": dict(n=8, loads=(5.0, 20.0), mus=(0.3,), realizations=1, t1_e3=0.05, t1_e4=0.05, t1_e6=0.05, rtol=0.1),
+}
+E4_COLUMNS = ["case", "mu", "realization", "n", "t1", "dF_star_field", "dF_star", "lo", "hi", "runs", "result",
+              "wall_s", "commit", "date"]
+E6_COLUMNS = ["n", "case", "dF", "dF_star_field", "dF_star", "dF_star_lo", "dF_star_hi", "search_runs",
+              "search_result", "buckled", "t_stop", "mode_before", "mode_at_buckling", "power_share", "second_mode",
+              "second_share", "wall_s", "commit", "date"]
+
+
+def _commit() -> str:
+    try:
+        here = os.path.dirname(os.path.abspath(__file__))
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              cwd=here).stdout.strip()
+    except OSError:
+        return ""
+
+
+def _settings(quick, n):
+    s = dict(SIZES[quick])
+    if n is not None:
+        s["n"] = int(n)
+    return s
+
+
+class _Points:
+    """The finished points of a part, read from its CSV, and the writer that appends new ones."""
+
+    def __init__(self, path, columns, key):
+        self.path, self.columns, self.key = path, columns, key
+        self.rows = list(csv.DictReader(open(path))) if os.path.exists(path) else []
+
+    def find(self, *k):
+        return [r for r in self.rows if self.key(r) == tuple(str(x) for x in k)]
+
+    def add(self, row):
+        row = {**row, "commit": _commit(), "date": datetime.date.today().isoformat()}
+        new = not os.path.exists(self.path)
+        with open(self.path, "a", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=self.columns)
+            if new:
+                w.writeheader()
+            w.writerow({c: row.get(c, "") for c in self.columns})
+        self.rows.append({c: str(row.get(c, "")) for c in self.columns})
+
+
+def e3(out, quick=False, progress=True, n=None) -> dict:
+    """E3's boundary of the 3D rod at `n` segments (default: the setting's): writes
+    `rod3d_boundary_n{n}_leapfrog.{json,csv,png}` and the runs file under `out`."""
+    import json
+
+    from .e3_rod3d import boundary_3d, plot_boundary_3d
+
+    s = _settings(quick, n)
+    res = boundary_3d(s["loads"], n=s["n"], rtol=s["rtol"], t1=s["t1_e3"],
+                      runs_csv=os.path.join(out, "rod3d_runs.csv"), progress=progress)
+    stem = os.path.join(out, f"rod3d_boundary_n{s['n']}_leapfrog")
+    with open(stem + ".json", "w") as fh:
+        json.dump(res, fh, indent=1)
+    write_csv(stem + ".csv", [dict(dF=p["dF"], n_segments=s["n"], mu=res["mu"], t1=res["t1"], dt=res["dt"],
+                                   field_mm_s=1e3 * p["field"], rod3d_mm_s=1e3 * p["rod3d"],
+                                   bracket_lo_mm_s=1e3 * p["bracket"][0] if p["bracket"] else math.nan,
+                                   bracket_hi_mm_s=1e3 * p["bracket"][1] if p["bracket"] else math.nan,
+                                   difference_percent=100 * (p["rod3d"] / p["field"] - 1), runs=p["runs"])
+                              for p in res["points"]])
+    plot_boundary_3d(res, stem + ".png")
+    return dict(n=s["n"], loads=list(s["loads"]), exponent_rod3d=res["exponent_rod3d"],
+                exponent_rod3d_stderr=res["exponent_rod3d_stderr"], exponent_field=res["exponent_field"],
+                exponent_field_stderr=res["exponent_field_stderr"], exponent_paper=PAPER_E3_EXPONENT,
+                runs=[p["runs"] for p in res["points"]], converged=sum(p["bracket"] is not None for p in res["points"]))
+
+
+def _critical_load(rod, amplitude, perturbation, key, model, n, t1, bracket, rtol):
+    import jax
+
+    from ..boundary import critical_load
+
+    kw = dict(n=n, method="bisection") if model == "rod3d" else dict(n=499 if perturbation == "random-velocity" else None)
+    t0 = time.perf_counter()
+    r, _ = critical_load(rod, amplitude, model=model, perturbation=perturbation, key=key, t1=t1, bracket=bracket,
+                         rtol=rtol if model == "rod3d" else 1e-4, sensitivities=(), **kw)
+    r = jax.block_until_ready(r)
+    return r, time.perf_counter() - t0
+
+
+def e4_point(case, mu, realization, n, t1=2.0, width=WIDTH, rtol=1e-2) -> dict:
+    """One E4 point: ΔF* [N] of the field model (to 1e-4) and of the 3D rod of `n` segments (label
+    bisection to `rtol`, bracket a factor `width` either side of the field model's), for the sine
+    15 mm/s (`case` "A") or the random velocity ±15 mm/s of `realization` ("B"); a row of
+    `E4_COLUMNS` without commit and date."""
+    import jax
+
+    from ..params import RodChannel
+
+    rod = RodChannel.reference(mu=mu)
+    kind = "sine" if case == "A" else "random-velocity"
+    key = jax.random.fold_in(jax.random.key(0), realization)
+    f, sec_f = _critical_load(rod, 15e-3, kind, key, "field", None, t1, (0.01, 100.0), None)
+    f = float(f.root)
+    r, sec = _critical_load(rod, 15e-3, kind, key, "rod3d", n, t1, (f / width, f * width), rtol)
+    return dict(case=case, mu=float(mu), realization=realization, n=n, t1=float(t1), dF_star_field=f,
+                dF_star=float(r.root), lo=float(r.lo), hi=float(r.hi), runs=int(r.evaluations), result=int(r.result),
+                wall_s=round(sec + sec_f, 1))
+
+
+def e4(out, quick=False, progress=True, n=None) -> dict:
+    """E4 A and B with the 3D rod at `n` segments: `rod3d_n{n}.csv` (one row per point) and
+    `.png` (ΔF* against μ, both models) under `out`."""
+    s = _settings(quick, n)
+    path = os.path.join(out, f"rod3d_n{s['n']}.csv")
+    done = _Points(path, E4_COLUMNS, lambda r: (r["case"], r["mu"], r["realization"], r["n"], r["t1"]))
+    cases = [("A", 0)] + [("B", r) for r in range(s["realizations"])]
+    for mu in s["mus"]:
+        for case, real in cases:
+            if done.find(case, float(mu), real, s["n"], float(s["t1_e4"])):
+                continue
+            row = e4_point(case, mu, real, s["n"], s["t1_e4"], WIDTH, s["rtol"])
+            done.add(row)
+            if progress:
+                print(f"  E4 {case}, mu = {mu:g}, realization {real}: 3D dF* = {row['dF_star']:.4g} N "
+                      f"({row['runs']} runs, {row['wall_s']:.0f} s), field {row['dF_star_field']:.4g} N", flush=True)
+    rows = [r for r in done.rows if int(r["n"]) == s["n"] and float(r["t1"]) == float(s["t1_e4"])]
+    _plot_e4(rows, path[:-4] + ".png", s["n"])
+    summary = {}
+    for case in ("A", "B"):
+        for mu in s["mus"]:
+            pts = [r for r in rows if r["case"] == case and float(r["mu"]) == float(mu) and int(r["result"]) == 0]
+            if pts:
+                summary[f"{case} mu={mu:g}"] = dict(rod3d=[float(r["dF_star"]) for r in pts],
+                                                    field=[float(r["dF_star_field"]) for r in pts])
+    return dict(n=s["n"], width=WIDTH, points=summary)
+
+
+def _plot_e4(rows, path, n):
+    fig, ax = subplots(figsize=(6.4, 4.2))
+    for case, color in (("A", "C0"), ("B", "C3")):
+        pts = [r for r in rows if r["case"] == case and int(r["result"]) == 0]
+        if not pts:
+            continue
+        mu = np.array([float(r["mu"]) for r in pts])
+        ax.loglog(mu, [float(r["dF_star_field"]) for r in pts], "s", mfc="none", color=color,
+                  label=f"E4 {case}: field model")
+        ax.loglog(mu, [float(r["dF_star"]) for r in pts], "o", color=color, ms=4, label=f"E4 {case}: 3D rod, {n} segments")
+    ax.set_xlabel("μ")
+    ax.set_ylabel("ΔF* [N]")
+    ax.set_title("E4 with the 3D rod: sine 15 mm/s (A), random velocity ±15 mm/s (B, each realization)", fontsize=8)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+
+
+def _modes(theta, n_modes=40):
+    import jax.numpy as jnp
+
+    from ..modal import modal_spectrum
+
+    p = np.asarray(modal_spectrum(jnp.asarray(theta), n_modes))
+    order = np.argsort(p)[::-1]
+    return int(order[0]) + 1, float(p[order[0]]), int(order[1]) + 1, float(p[order[1]])
+
+
+def e6c(out, quick=False, progress=True, n=None) -> dict:
+    """E6C with the 3D rod at `n` segments: `rod3d_random_position_n{n}.csv` under `out`."""
+    import jax
+
+    from ..params import RodChannel
+    from ..scene import Scene, make_perturbation
+
+    s = _settings(quick, n)
+    rod = RodChannel.reference(mu=0.9)
+    key = jax.random.key(6)
+    t1 = s["t1_e6"]
+    path = os.path.join(out, f"rod3d_random_position_n{s['n']}.csv")
+    done = _Points(path, E6_COLUMNS, lambda r: (r["n"], r["case"]))
+    if len(done.find(s["n"], "1.05 dF*")) == 0 or len(done.find(s["n"], "paper's 40 N")) == 0:
+        f, _ = _critical_load(rod, 2.0, "random-position", key, "field", None, t1, (1e-3, 300.0), None)
+        f = float(f.root)
+        r, sec = _critical_load(rod, 2.0, "random-position", key, "rod3d", s["n"], t1, (f / 4, 4 * f), s["rtol"])
+        star = float(r.root)
+        pert = make_perturbation("random-position", 2.0, 6, key)
+        for case, dF in (("1.05 dF*", 1.05 * star), ("paper's 40 N", 40.0)):
+            if done.find(s["n"], case):
+                continue
+            if not math.isfinite(dF):  # the search failed: recorded, so that it is not run again
+                done.add(dict(n=s["n"], case=case, dF=dF, dF_star_field=f, dF_star=star, dF_star_lo=float(r.lo),
+                              dF_star_hi=float(r.hi), search_runs=int(r.evaluations), search_result=int(r.result),
+                              wall_s=round(sec, 1)))
+                sec = 0.0
+                continue
+            t0 = time.perf_counter()
+            sol = Scene(rod, dF, pert, "rod3d", s["n"]).run(t1=t1, n_save=501)
+            theta = np.asarray(sol.observables["theta"])[:, 1:-1]
+            i = min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)
+            m, share, m2, share2 = _modes(theta[i])
+            done.add(dict(n=s["n"], case=case, dF=dF, dF_star_field=f, dF_star=star, dF_star_lo=float(r.lo),
+                          dF_star_hi=float(r.hi), search_runs=int(r.evaluations), search_result=int(r.result),
+                          buckled=int(sol.buckled), t_stop=float(sol.t_stop), mode_before=_modes(theta[0])[0],
+                          mode_at_buckling=m, power_share=share, second_mode=m2, second_share=share2,
+                          wall_s=round(sec + time.perf_counter() - t0, 1)))
+            sec = 0.0  # the search's time is counted once, on the first row
+            if progress:
+                print(f"  E6C {case} = {dF:.4g} N: mode {m} ({share:.2f}; next {m2}: {share2:.2f})", flush=True)
+    rows = {r["case"]: r for r in done.rows if int(r["n"]) == s["n"] and r["buckled"] != ""}
+    return {case: dict(dF=float(r["dF"]), dF_star=float(r["dF_star"]), dF_star_field=float(r["dF_star_field"]),
+                       mode=int(r["mode_at_buckling"]), share=float(r["power_share"]), next_mode=int(r["second_mode"]),
+                       next_share=float(r["second_share"])) for case, r in rows.items()} | dict(n=s["n"])
