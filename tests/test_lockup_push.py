@@ -93,12 +93,14 @@ def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, cap
     entry carries the soft-string straight section's F_far + μ_d w L (1 − 1/(2n)) (the held entry
     node's half segment has no friction) plus the damping's drag c·m·v (1.507 F₀ measured at
     μL/ℓ = 1), the far end moves with the entry, and the soft string gives 1 F₀ for every variant
-    (no section buckles). CSV, JSON and figure are written."""
+    (no section buckles). Pulled back as far (`--unload`), the friction turns: the entry carries
+    F_far − μ_d w L (1 − 1/(2n)) − c·m·v, and the far end comes back to where it started. CSV, JSON
+    and figure are written."""
     from jaxrod.cli import main
 
     out = tmp_path / "lk"
     assert main(["lockup", "--mu-L", "0.5", "--far-load", "0.5", "--push", "0.01", "--out", str(out), "--json",
-                 "--quiet"]) == 0
+                 "--quiet", "--unload"]) == 0
     summary = __import__("json").loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert sorted(p.name for p in out.iterdir()) == ["lockup.csv", "lockup.json", "lockup.png"]
     lo, hi = summary["entry_force_over_F0_last_fifth"]
@@ -106,10 +108,14 @@ def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, cap
     assert abs(lo - expected) < 2e-3 and abs(hi - expected) < 2e-3
     assert all(math.isclose(v, 1.0, rel_tol=1e-9) for v in summary["soft_string_entry_force_over_F0"].values())
     rows = (out / "lockup.csv").read_text().splitlines()
-    assert rows[0].split(",")[:4] == ["t", "push", "far_displacement", "F_in"] and len(rows) == 202
-    push, far = (float(x) for x in rows[-1].split(",")[1:3])
+    assert rows[0].split(",")[:4] == ["t", "push", "far_displacement", "F_in"] and len(rows) == 1 + 201 + 200
+    push, far = (float(x) for x in rows[201].split(",")[1:3])
     assert math.isclose(far, push, rel_tol=1e-2)  # the far end moves with the entry (less the compression)
     assert summary["helical_over_ell_end"] == 0 and summary["sinusoidal_over_ell_end"] == 0
+    back = summary["unloading"]
+    expected = 0.5 - 0.5 * (1 - 1 / (2 * summary["n_segments"])) - summary["drag_over_F0"]
+    assert all(abs(f - expected) < 2e-3 for f in back["entry_force_over_F0_last_fifth"]), back
+    assert abs(back["far_end_moved_m"]) < 1e-4 and abs(back["push_end_m"]) < 1e-9
 
 
 def test_lock_up_is_told_by_the_far_end_and_the_entry_force():

@@ -17,9 +17,10 @@ the buckling threshold) to a relative bracket of 1 %, started from the field mod
 
 A sweep never loses finished work: E3 appends every run to `e3/rod3d_runs.csv` and replays it,
 E4 and E6C append every finished point to their CSV (with wall time, commit and date) and skip
-the points already there when the command runs again. E5 with the 3D rod is not a part: per μ
-it needs the dominant mode of about 10 buckled runs at 1.05 ΔF* of each realization, so about
-10 searches and 20 runs at 500 segments (about 6 h per μ on this CPU by the E4 figures).
+the points already there when the command runs again. E5 with the 3D rod is not a part: it
+needs a ΔF* search and a run at 1.05 ΔF* for each of 8 μ × 8 realizations × 2 perturbations, 128
+searches at about 30 min each at 500 segments on one core of this CPU (the E4 B figures), about
+64 h; E4 here (5 μ × 5 perturbations) is about 12 h.
 """
 
 from __future__ import annotations
@@ -46,8 +47,8 @@ SIZES = {
                t1_e6=0.5, rtol=1e-2),
     "tiny": dict(n=8, loads=(5.0, 20.0), mus=(0.3,), realizations=1, t1_e3=0.05, t1_e4=0.05, t1_e6=0.05, rtol=0.1),
 }
-E4_COLUMNS = ["case", "mu", "realization", "n", "t1", "dF_star_field", "dF_star", "lo", "hi", "runs", "result",
-              "wall_s", "commit", "date"]
+E4_COLUMNS = ["case", "mu", "realization", "n", "t1", "width", "dF_star_field", "dF_star", "lo", "hi", "runs",
+              "result", "wall_s", "commit", "date"]
 E6_COLUMNS = ["n", "case", "dF", "dF_star_field", "dF_star", "dF_star_lo", "dF_star_hi", "search_runs",
               "search_result", "buckled", "t_stop", "mode_before", "mode_at_buckling", "power_share", "second_mode",
               "second_share", "wall_s", "commit", "date"]
@@ -144,7 +145,7 @@ def e4_point(case, mu, realization, n, t1=2.0, width=WIDTH, rtol=1e-2) -> dict:
     f, sec_f = _critical_load(rod, 15e-3, kind, key, "field", None, t1, (0.01, 100.0), None)
     f = float(f.root)
     r, sec = _critical_load(rod, 15e-3, kind, key, "rod3d", n, t1, (f / width, f * width), rtol)
-    return dict(case=case, mu=float(mu), realization=realization, n=n, t1=float(t1), dF_star_field=f,
+    return dict(case=case, mu=float(mu), realization=realization, n=n, t1=float(t1), width=width, dF_star_field=f,
                 dF_star=float(r.root), lo=float(r.lo), hi=float(r.hi), runs=int(r.evaluations), result=int(r.result),
                 wall_s=round(sec + sec_f, 1))
 
