@@ -36,7 +36,7 @@ import numpy as np
 
 from ..output import subplots, write_csv
 
-__all__ = ["e3", "e4", "e4_point", "e6c", "SIZES", "WIDTH", "PAPER_E3_EXPONENT"]
+__all__ = ["e3", "e4", "e4_point", "e6c", "write_boundary", "SIZES", "WIDTH", "PAPER_E3_EXPONENT"]
 
 WIDTH = 1.5
 PAPER_E3_EXPONENT = -0.77  # ../shared/PHYSICS.md §5 (results/paper/paper_numbers.json)
@@ -91,26 +91,33 @@ class _Points:
         self.rows.append({c: str(row.get(c, "")) for c in self.columns})
 
 
-def e3(out, quick=False, progress=True, n=None) -> dict:
-    """E3's boundary of the 3D rod at `n` segments (default: the setting's): writes
-    `rod3d_boundary_n{n}_leapfrog.{json,csv,png}` and the runs file under `out`."""
+def write_boundary(res: dict, stem: str) -> None:
+    """`e3_rod3d.boundary_3d`'s result as `stem.json` (all of it), `stem.csv` (one row per load,
+    plain numbers) and `stem.png`."""
     import json
 
-    from .e3_rod3d import boundary_3d, plot_boundary_3d
+    from .e3_rod3d import plot_boundary_3d
 
-    s = _settings(quick, n)
-    res = boundary_3d(s["loads"], n=s["n"], rtol=s["rtol"], t1=s["t1_e3"],
-                      runs_csv=os.path.join(out, "rod3d_runs.csv"), progress=progress)
-    stem = os.path.join(out, f"rod3d_boundary_n{s['n']}_leapfrog")
     with open(stem + ".json", "w") as fh:
         json.dump(res, fh, indent=1)
-    write_csv(stem + ".csv", [dict(dF=p["dF"], n_segments=s["n"], mu=res["mu"], t1=res["t1"], dt=res["dt"],
+    write_csv(stem + ".csv", [dict(dF=p["dF"], n_segments=res["n_segments"], mu=res["mu"], t1=res["t1"], dt=res["dt"],
                                    field_mm_s=1e3 * p["field"], rod3d_mm_s=1e3 * p["rod3d"],
                                    bracket_lo_mm_s=1e3 * p["bracket"][0] if p["bracket"] else math.nan,
                                    bracket_hi_mm_s=1e3 * p["bracket"][1] if p["bracket"] else math.nan,
                                    difference_percent=100 * (p["rod3d"] / p["field"] - 1), runs=p["runs"])
                               for p in res["points"]])
     plot_boundary_3d(res, stem + ".png")
+
+
+def e3(out, quick=False, progress=True, n=None) -> dict:
+    """E3's boundary of the 3D rod at `n` segments (default: the setting's): writes
+    `rod3d_boundary_n{n}_leapfrog.{json,csv,png}` and the runs file under `out`."""
+    from .e3_rod3d import boundary_3d
+
+    s = _settings(quick, n)
+    res = boundary_3d(s["loads"], n=s["n"], rtol=s["rtol"], t1=s["t1_e3"],
+                      runs_csv=os.path.join(out, "rod3d_runs.csv"), progress=progress)
+    write_boundary(res, os.path.join(out, f"rod3d_boundary_n{s['n']}_leapfrog"))
     return dict(n=s["n"], loads=list(s["loads"]), exponent_rod3d=res["exponent_rod3d"],
                 exponent_rod3d_stderr=res["exponent_rod3d_stderr"], exponent_field=res["exponent_field"],
                 exponent_field_stderr=res["exponent_field_stderr"], exponent_paper=PAPER_E3_EXPONENT,

@@ -18,15 +18,14 @@ plain numbers) and `.png`.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 
 import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from jaxrod.experiments.e3_rod3d import boundary_3d, plot_boundary_3d  # noqa: E402
-from jaxrod.output import write_csv  # noqa: E402
+from jaxrod.experiments.e3_rod3d import boundary_3d  # noqa: E402
+from jaxrod.experiments.paper3d import write_boundary  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -50,15 +49,7 @@ def main():
     stem = os.path.join(args.dir, f"rod3d_boundary_n{args.n}" + ("" if args.friction_at == "surface" else "_axis")
                         + ("" if args.sink == 1e-3 else f"_sink{args.sink:g}")
                         + ("_leapfrog" if args.scheme == "leapfrog" else ""))
-    with open(stem + ".json", "w") as fh:
-        json.dump(res, fh, indent=1)
-    write_csv(stem + ".csv", [dict(dF=p["dF"], n_segments=args.n, mu=res["mu"], t1=res["t1"], dt=res["dt"],
-                                   field_mm_s=1e3 * p["field"], rod3d_mm_s=1e3 * p["rod3d"],
-                                   bracket_lo_mm_s=1e3 * p["bracket"][0] if p["bracket"] else float("nan"),
-                                   bracket_hi_mm_s=1e3 * p["bracket"][1] if p["bracket"] else float("nan"),
-                                   difference_percent=100 * (p["rod3d"] / p["field"] - 1), runs=p["runs"])
-                              for p in res["points"]])
-    plot_boundary_3d(res, stem + ".png")
+    write_boundary(res, stem)
     print(f"3D rod ({args.n} segments): v0* ∝ ΔF^({res['exponent_rod3d']:.3f} ± {res['exponent_rod3d_stderr']:.3f}); "
           f"field model: ΔF^({res['exponent_field']:.3f} ± {res['exponent_field_stderr']:.3f}); theory −0.5")
     print("wrote", stem + ".json/.csv/.png")
