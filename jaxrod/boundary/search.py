@@ -43,15 +43,13 @@ def _resolution(rod, dF, model, n, mode, dt, perturbation="sine"):
     """Static n and dt from concrete values (the largest load of the search)."""
     if n is not None and dt is not None:
         return n, dt
-    try:
-        probe = Scene(rod, dF, make_perturbation(perturbation, 1.0, mode), kind=model, n=n, mode=mode, dt=dt)
-        n = probe.size()
-        return n, probe.step()
-    except (ValueError, jax.errors.ConcretizationTypeError):
+    if any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((rod, dF))):
         raise ValueError(
             "pass n and dt explicitly when the rod or the load is traced (e.g. under vmap): "
             "they are static settings."
-        ) from None
+        )
+    probe = Scene(rod, dF, make_perturbation(perturbation, 1.0, mode), kind=model, n=n, mode=mode, dt=dt)
+    return probe.size(), probe.step()
 
 
 def _scene(rod, dF, v0, kind, n, mode, dt, perturbation, key):
