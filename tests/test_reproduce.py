@@ -182,7 +182,8 @@ def test_reproduce_with_the_3d_rod_writes_every_point_once(tmp_path):
 def test_e4_with_the_3d_rod_takes_a_point_of_a_longer_horizon_and_runs_no_other(tmp_path, monkeypatch):
     """A point recorded on the setting's horizon or a longer one (a run stable for longer is stable
     for the shorter) is reported, on its longest horizon, and not run again; a point recorded only
-    on a shorter horizon is run (here `e4_point` raises instead)."""
+    on a shorter horizon is run (here `e4_point` raises instead), and so is one whose bracket held no
+    boundary, with a wider bracket."""
     from jaxrod.experiments import paper3d
 
     cols = paper3d.E4_COLUMNS  # the tiny setting: n = 8, μ = 0.3, one realization, horizon 0.05 s
@@ -192,16 +193,20 @@ def test_e4_with_the_3d_rod_takes_a_point_of_a_longer_horizon_and_runs_no_other(
         path.write_text(",".join(cols) + "\n" + "".join(",".join(str(r.get(c, "")) for c in cols) + "\n"
                                                         for r in rows))
 
-    def refuse(case, mu, realization, *args, **kwargs):
-        raise RuntimeError(f"ran {case} {realization}")
+    def refuse(case, mu, realization, n, t1, width, rtol):
+        raise RuntimeError(f"ran {case} {realization} at width {width:g}")
 
     monkeypatch.setattr(paper3d, "e4_point", refuse)
     a = [dict(case="A", mu=0.3, realization=0, n=8, t1=t1, dF_star_field=9.3, dF_star=f, result=0)
          for t1, f in ((0.5, 9.0), (2.0, 9.1))]
     b_short = dict(case="B", mu=0.3, realization=0, n=8, t1=0.01, dF_star_field=13.6, dF_star=11.0, result=0)
     write(a + [b_short])
-    with pytest.raises(RuntimeError, match="^ran B 0$"):
+    with pytest.raises(RuntimeError, match="^ran B 0 at width 1.5$"):
         paper3d.e4(str(tmp_path), quick="tiny", progress=False)
     write(a + [b_short, {**b_short, "t1": 0.05, "dF_star": 12.0}])
     res = paper3d.e4(str(tmp_path), quick="tiny", progress=False)
     assert res["points"] == {"A mu=0.3": dict(rod3d=[9.1], field=[9.3]), "B mu=0.3": dict(rod3d=[12.0], field=[13.6])}
+    # a search whose bracket held no boundary (result 2) is run again with the width squared
+    write(a + [{**b_short, "t1": 0.05, "width": 1.5, "dF_star": "nan", "result": 2}])
+    with pytest.raises(RuntimeError, match="^ran B 0 at width 2.25$"):
+        paper3d.e4(str(tmp_path), quick="tiny", progress=False)

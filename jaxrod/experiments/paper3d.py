@@ -166,25 +166,30 @@ def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
 
     A point found in the CSV on the setting's horizon or a longer one is not run again (a run
     stable for the longer horizon is stable for the shorter; each point is reported on the
-    longest horizon it has)."""
+    longest horizon it has). A point whose 3D search found both ends of its bracket on one side
+    (`invalid_bracket`) is run again with the bracket's width squared."""
+    from ..boundary.roots import ROOT_RESULTS
+
     s = _settings(quick, n)
     path = os.path.join(out, f"rod3d_n{s['n']}.csv")
     done = _Points(path, E4_COLUMNS, lambda r: (r["case"], r["mu"], r["realization"], r["n"]))
     t1 = float(s["t1_e4"])
 
-    def found(*k):
+    def found(*k):  # a converged point before one that failed, then the longest horizon, then the widest
         rows = [r for r in done.find(*k) if float(r["t1"]) >= t1]
-        return max(rows, key=lambda r: float(r["t1"])) if rows else None
+        return max(rows, key=lambda r: (r["result"] == "0", float(r["t1"]), float(r["width"] or 0))) if rows else None
 
     cases = [("A", 0)] + [("B", r) for r in range(s["realizations"])]
     rows = []
     for mu in s["mus"] if mus is None else mus:
         for case, real in cases:
             row = found(case, float(mu), real, s["n"])
-            if row is not None:
+            if row is not None and row["result"] != str(ROOT_RESULTS.invalid_bracket):
                 rows.append(row)
                 continue
-            row = e4_point(case, mu, real, s["n"], s["t1_e4"], WIDTH, s["rtol"])
+            # the 3D rod's ΔF* outside the bracket of a point that failed: the bracket squared
+            width = WIDTH if row is None else float(row["width"]) ** 2
+            row = e4_point(case, mu, real, s["n"], s["t1_e4"], width, s["rtol"])
             done.add(row)
             rows.append(done.rows[-1])
             if progress:
