@@ -42,7 +42,7 @@ def _runners_3d(n) -> dict:
     from .experiments import paper3d
 
     return {name: (lambda out, quick, progress, f=f: f(out, quick, progress, n=n))
-            for name, f in (("e3", paper3d.e3), ("e4", paper3d.e4), ("e6", paper3d.e6c))}
+            for name, f in (("e3", paper3d.e3), ("e4", paper3d.e4), ("e5", paper3d.e5), ("e6", paper3d.e6c))}
 
 
 def reproduce(which, out: str = "results/paper", quick=False, progress: bool = True, model: str = "field",
@@ -51,7 +51,7 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
     `lockup`, beyond the paper and hours long in its full setting, only by name), write figures, CSV
     and `results.json` under `out`; returns the dict written. `quick`: `False` (the full run),
     `True` (coarser, fewer realizations: minutes) or `"tiny"` (the test suite's structure check).
-    `model="rod3d"`: E3, E4 and E6 (its part C) with the 3D rod of `n` segments (default 500;
+    `model="rod3d"`: E3, E4, E5 (random velocity) and E6 (its part C) with the 3D rod of `n` segments (default 500;
     [`jaxrod.experiments.paper3d`][]), recorded as `e3_rod3d`, ... in `results.json`."""
     import jax
 

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..output import subplots, write_csv
 
-__all__ = ["e3", "e4", "e4_point", "e6c", "write_boundary", "SIZES", "WIDTH", "PAPER_E3_EXPONENT"]
+__all__ = ["e3", "e4", "e4_point", "e5", "e6c", "write_boundary", "SIZES", "WIDTH", "PAPER_E3_EXPONENT"]
 
 WIDTH = 1.5
 PAPER_E3_EXPONENT = -0.77  # ../shared/PHYSICS.md §5 (results/paper/paper_numbers.json)
@@ -52,6 +52,8 @@ SIZES = {
 }
 E4_COLUMNS = ["case", "mu", "realization", "n", "t1", "width", "dF_star_field", "dF_star", "lo", "hi", "runs",
               "result", "wall_s", "commit", "date"]
+E5_COLUMNS = ["mu", "realization", "n", "t1"] + [p + c for p in ("", "field_") for c in (
+    "dF_star", "buckled", "t_stop", "mode", "share", "second_mode", "second_share", "wall_s")] + ["commit", "date"]
 E6_COLUMNS = ["n", "case", "dF", "dF_star_field", "dF_star", "dF_star_lo", "dF_star_hi", "search_runs",
               "search_result", "buckled", "t_stop", "mode_before", "mode_at_buckling", "power_share", "second_mode",
               "second_share", "wall_s", "commit", "date"]
@@ -160,6 +162,12 @@ def e4_point(case, mu, realization, n, t1=0.5, width=WIDTH, rtol=1e-2) -> dict:
                 wall_s=round(sec + sec_f, 1))
 
 
+def _best(rows):
+    """Of the rows of one E4 point: a converged one before one that failed, then the longest
+    horizon, then the widest bracket (None for none)."""
+    return max(rows, key=lambda r: (r["result"] == "0", float(r["t1"]), float(r["width"] or 0))) if rows else None
+
+
 def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
     """E4 A and B with the 3D rod at `n` segments: `rod3d_n{n}.csv` (one row per point) and
     `.png` (ΔF* against μ, both models) under `out`; `mus` a subset of the setting's μ to run.
@@ -167,30 +175,34 @@ def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
     A point found in the CSV on the setting's horizon or a longer one is not run again (a run
     stable for the longer horizon is stable for the shorter; each point is reported on the
     longest horizon it has). A point whose 3D search found both ends of its bracket on one side
-    (`invalid_bracket`) is run again with the bracket's width squared."""
+    (`invalid_bracket`) is run again with the bracket's width squared, up to `WIDTH`⁴."""
     from ..boundary.roots import ROOT_RESULTS
 
     s = _settings(quick, n)
     path = os.path.join(out, f"rod3d_n{s['n']}.csv")
+    os.makedirs(out, exist_ok=True)
     done = _Points(path, E4_COLUMNS, lambda r: (r["case"], r["mu"], r["realization"], r["n"]))
     t1 = float(s["t1_e4"])
 
-    def found(*k):  # a converged point before one that failed, then the longest horizon, then the widest
-        rows = [r for r in done.find(*k) if float(r["t1"]) >= t1]
-        return max(rows, key=lambda r: (r["result"] == "0", float(r["t1"]), float(r["width"] or 0))) if rows else None
+    def found(*k):
+        return _best([r for r in done.find(*k) if float(r["t1"]) >= t1])
 
     cases = [("A", 0)] + [("B", r) for r in range(s["realizations"])]
     rows = []
     for mu in s["mus"] if mus is None else mus:
         for case, real in cases:
             row = found(case, float(mu), real, s["n"])
-            if row is not None and row["result"] != str(ROOT_RESULTS.invalid_bracket):
+            outside = row is not None and row["result"] == str(ROOT_RESULTS.invalid_bracket)
+            if row is not None and not (outside and float(row["width"] or 0) < WIDTH ** 4):
                 rows.append(row)
                 continue
-            # the 3D rod's ΔF* outside the bracket of a point that failed: the bracket squared
-            width = WIDTH if row is None else float(row["width"]) ** 2
-            row = e4_point(case, mu, real, s["n"], s["t1_e4"], width, s["rtol"])
-            done.add(row)
+            width = float(row["width"]) ** 2 if outside else WIDTH
+            while True:
+                row = e4_point(case, mu, real, s["n"], s["t1_e4"], width, s["rtol"])
+                done.add(row)
+                if row["result"] != ROOT_RESULTS.invalid_bracket or width >= WIDTH ** 4:
+                    break
+                width **= 2  # the 3D rod's ΔF* outside the bracket: the bracket squared
             rows.append(done.rows[-1])
             if progress:
                 print(f"  E4 {case}, mu = {mu:g}, realization {real}: 3D dF* = {row['dF_star']:.4g} N "
@@ -235,6 +247,73 @@ def _modes(theta, n_modes=40):
     p = np.asarray(modal_spectrum(jnp.asarray(theta), n_modes))
     order = np.argsort(p)[::-1]
     return int(order[0]) + 1, float(p[order[0]]), int(order[1]) + 1, float(p[order[1]])
+
+
+def e5(out, quick=False, progress=True, n=None) -> dict:
+    """E5 for the random velocity with the 3D rod at `n` segments, on E4's points (run first where
+    missing, under `out`/../e4): for each μ and realization, one run of each model at 1.05 times
+    its own ΔF* (the field model at 499 nodes), on the point's horizon, and the dominant mode of θ
+    at the stop with its share of the power of every mode; `rod3d_random_velocity_n{n}.csv` and
+    `.png` under `out`."""
+    import jax
+
+    from ..params import RodChannel
+    from ..scene import Scene, make_perturbation
+
+    s = _settings(quick, n)
+    e4(os.path.join(os.path.dirname(os.path.abspath(out)), "e4"), quick, progress, n)
+    e4_rows = list(csv.DictReader(open(os.path.join(os.path.dirname(os.path.abspath(out)), "e4", f"rod3d_n{s['n']}.csv"))))
+    path = os.path.join(out, f"rod3d_random_velocity_n{s['n']}.csv")
+    done = _Points(path, E5_COLUMNS, lambda r: (r["mu"], r["realization"], r["n"]))
+    for mu in s["mus"]:
+        for real in range(s["realizations"]):
+            pt = _best([r for r in e4_rows if (r["case"], float(r["mu"]), int(r["realization"]), int(r["n"]))
+                        == ("B", float(mu), real, s["n"]) and float(r["t1"]) >= float(s["t1_e4"])])
+            if pt is None or pt["result"] != "0" or done.find(float(mu), real, s["n"]):
+                continue
+            rod, t1 = RodChannel.reference(mu=mu), float(pt["t1"])
+            pert = make_perturbation("random-velocity", 15e-3, 6, jax.random.fold_in(jax.random.key(0), real))
+            row = dict(mu=float(mu), realization=real, n=s["n"], t1=t1)
+            for model, star, size in (("rod3d", float(pt["dF_star"]), s["n"]), ("field", float(pt["dF_star_field"]), 499)):
+                t0 = time.perf_counter()
+                sol = Scene(rod, 1.05 * star, pert, model, size).run(t1=t1, n_save=501)
+                if model == "rod3d":
+                    theta = np.asarray(sol.observables["theta"])[:, 1:-1]
+                    theta = theta[min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)]
+                else:
+                    theta = np.asarray(sol.q_final)
+                m, share, m2, share2 = _modes(theta, None)
+                pre = "" if model == "rod3d" else "field_"
+                row |= {pre + "dF_star": star, pre + "buckled": int(sol.buckled), pre + "t_stop": float(sol.t_stop),
+                        pre + "mode": m, pre + "share": share, pre + "second_mode": m2, pre + "second_share": share2,
+                        pre + "wall_s": round(time.perf_counter() - t0, 1)}
+            done.add(row)
+            if progress:
+                print(f"  E5 mu = {mu:g}, realization {real}: 3D mode {row['mode']} ({row['share']:.2f}), field mode "
+                      f"{row['field_mode']} ({row['field_share']:.2f})", flush=True)
+    rows = [r for r in done.rows if int(r["n"]) == s["n"]]
+    out_rows = {}
+    for model, pre in (("rod3d", ""), ("field", "field_")):
+        ok = [r for r in rows if r[pre + "buckled"] == "1"]
+        out_rows[model] = {f"mu={m:g}": [int(r[pre + "mode"]) for r in ok if float(r["mu"]) == m] for m in s["mus"]}
+    _plot_e5(rows, path[:-4] + ".png", s["n"])
+    return dict(n=s["n"], dominant_mode=out_rows)
+
+
+def _plot_e5(rows, path, n):
+    fig, ax = subplots(figsize=(6.4, 4.2))
+    for pre, label, mark in (("", f"3D rod, {n} segments", "o"), ("field_", "field model, 499 nodes", "s")):
+        ok = [r for r in rows if r[pre + "buckled"] == "1"]
+        ax.plot([float(r["mu"]) for r in ok], [int(r[pre + "mode"]) for r in ok], mark, mfc="none" if pre else None,
+                label=label)
+    ax.plot([0.05, 1.0], [6, 32], "k--", lw=0.8, label="the paper: 6 → 32 (random velocity)")
+    ax.set_xscale("log")
+    ax.set_xlabel("μ")
+    ax.set_ylabel("dominant mode at 1.05 ΔF*")
+    ax.set_title("E5 with the 3D rod: random velocity ±15 mm/s, each realization", fontsize=8)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
 
 
 def e6c(out, quick=False, progress=True, n=None) -> dict:
