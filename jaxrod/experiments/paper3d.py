@@ -42,6 +42,7 @@ from ..output import subplots, write_csv
 __all__ = ["e3", "e4", "e4_point", "e5", "e6c", "write_boundary", "SIZES", "WIDTH", "PAPER_E3_EXPONENT"]
 
 WIDTH = 1.5
+E4_CASES = {"A": ("sine", 15e-3), "B": ("random-velocity", 15e-3), "C": ("random-position", 2.0)}
 PAPER_E3_EXPONENT = -0.77  # ../shared/PHYSICS.md §5 (results/paper/paper_numbers.json)
 SIZES = {
     False: dict(n=500, loads=(0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 40.0, 60.0), mus=(0.05, 0.1, 0.3, 0.5, 1.0),
@@ -52,7 +53,7 @@ SIZES = {
 }
 E4_COLUMNS = ["case", "mu", "realization", "n", "t1", "width", "dF_star_field", "dF_star", "lo", "hi", "runs",
               "result", "wall_s", "commit", "date"]
-E5_COLUMNS = ["mu", "realization", "n", "t1"] + [p + c for p in ("", "field_") for c in (
+E5_COLUMNS = ["perturbation", "mu", "realization", "n", "t1"] + [p + c for p in ("", "field_") for c in (
     "dF_star", "buckled", "t_stop", "mode", "share", "second_mode", "second_share", "wall_s")] + ["commit", "date"]
 E6_COLUMNS = ["n", "case", "dF", "dF_star_field", "dF_star", "dF_star_lo", "dF_star_hi", "search_runs",
               "search_result", "buckled", "t_stop", "mode_before", "mode_at_buckling", "power_share", "second_mode",
@@ -145,18 +146,18 @@ def _critical_load(rod, amplitude, perturbation, key, model, n, t1, bracket, rto
 def e4_point(case, mu, realization, n, t1=0.5, width=WIDTH, rtol=1e-2) -> dict:
     """One E4 point: ΔF* [N] of the field model (to 1e-4) and of the 3D rod of `n` segments (label
     bisection to `rtol`, bracket a factor `width` either side of the field model's), for the sine
-    15 mm/s (`case` "A") or the random velocity ±15 mm/s of `realization` ("B"); a row of
-    `E4_COLUMNS` without commit and date."""
+    15 mm/s (`case` "A"), the random velocity ±15 mm/s ("B") or the random position (forces
+    ±2 N/m for 1 ms, "C") of `realization`; a row of `E4_COLUMNS` without commit and date."""
     import jax
 
     from ..params import RodChannel
 
     rod = RodChannel.reference(mu=mu)
-    kind = "sine" if case == "A" else "random-velocity"
+    kind, amplitude = E4_CASES[case]
     key = jax.random.fold_in(jax.random.key(0), realization)
-    f, sec_f = _critical_load(rod, 15e-3, kind, key, "field", None, t1, (0.01, 100.0), None)
+    f, sec_f = _critical_load(rod, amplitude, kind, key, "field", None, t1, (0.01, 300.0), None)
     f = float(f.root)
-    r, sec = _critical_load(rod, 15e-3, kind, key, "rod3d", n, t1, (f / width, f * width), rtol)
+    r, sec = _critical_load(rod, amplitude, kind, key, "rod3d", n, t1, (f / width, f * width), rtol)
     return dict(case=case, mu=float(mu), realization=realization, n=n, t1=float(t1), width=width, dF_star_field=f,
                 dF_star=float(r.root), lo=float(r.lo), hi=float(r.hi), runs=int(r.evaluations), result=int(r.result),
                 wall_s=round(sec + sec_f, 1))
@@ -187,7 +188,7 @@ def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
     def found(*k):
         return _best([r for r in done.find(*k) if float(r["t1"]) >= t1])
 
-    cases = [("A", 0)] + [("B", r) for r in range(s["realizations"])]
+    cases = [("A", 0)] + [(c, r) for c in ("B", "C") for r in range(s["realizations"])]
     rows = []
     for mu in s["mus"] if mus is None else mus:
         for case, real in cases:
@@ -209,7 +210,7 @@ def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
                       f"({row['runs']} runs, {row['wall_s']:.0f} s), field {row['dF_star_field']:.4g} N", flush=True)
     _plot_e4(rows, path[:-4] + ".png", s["n"])
     summary = {}
-    for case in ("A", "B"):
+    for case in ("A", "B", "C"):
         for mu in s["mus"]:
             pts = [r for r in rows if r["case"] == case and float(r["mu"]) == float(mu) and int(r["result"]) == 0]
             if pts:
@@ -220,7 +221,7 @@ def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
 
 def _plot_e4(rows, path, n):
     fig, ax = subplots(figsize=(6.4, 4.2))
-    for case, color in (("A", "C0"), ("B", "C3")):
+    for case, color in (("A", "C0"), ("B", "C3"), ("C", "C2")):
         pts = [r for r in rows if r["case"] == case and int(r["result"]) == 0]
         if not pts:
             continue
@@ -230,7 +231,7 @@ def _plot_e4(rows, path, n):
         ax.loglog(mu, [float(r["dF_star"]) for r in pts], "o", color=color, ms=4, label=f"E4 {case}: 3D rod, {n} segments")
     ax.set_xlabel("μ")
     ax.set_ylabel("ΔF* [N]")
-    ax.set_title("E4 with the 3D rod: sine 15 mm/s (A), random velocity ±15 mm/s (B, each realization)", fontsize=8)
+    ax.set_title("E4 with the 3D rod: sine 15 mm/s (A), random velocity ±15 mm/s (B), random position (C)", fontsize=8)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7)
     else:
@@ -249,69 +250,78 @@ def _modes(theta, n_modes=40):
     return int(order[0]) + 1, float(p[order[0]]), int(order[1]) + 1, float(p[order[1]])
 
 
-def e5(out, quick=False, progress=True, n=None) -> dict:
-    """E5 for the random velocity with the 3D rod at `n` segments, on E4's points (run first where
-    missing, under `out`/../e4): for each μ and realization, one run of each model at 1.05 times
-    its own ΔF* (the field model at 499 nodes), on the point's horizon, and the dominant mode of θ
-    at the stop with its share of the power of every mode; `rod3d_random_velocity_n{n}.csv` and
-    `.png` under `out`."""
+def e5(out, quick=False, progress=True, n=None, mus=None) -> dict:
+    """E5 with the 3D rod at `n` segments, on E4's points (run first where missing, under
+    `out`/../e4): for each random perturbation (E4's B and C), μ and realization, one run of each
+    model at 1.05 times its own ΔF*, on the point's horizon, and the dominant mode of θ at the stop
+    with its share of the power of every mode; `rod3d_n{n}.csv` and `.png` under `out`; `mus` a
+    subset of the setting's μ to run."""
     import jax
 
     from ..params import RodChannel
     from ..scene import Scene, make_perturbation
 
     s = _settings(quick, n)
-    e4(os.path.join(os.path.dirname(os.path.abspath(out)), "e4"), quick, progress, n)
-    e4_rows = list(csv.DictReader(open(os.path.join(os.path.dirname(os.path.abspath(out)), "e4", f"rod3d_n{s['n']}.csv"))))
-    path = os.path.join(out, f"rod3d_random_velocity_n{s['n']}.csv")
-    done = _Points(path, E5_COLUMNS, lambda r: (r["mu"], r["realization"], r["n"]))
-    for mu in s["mus"]:
-        for real in range(s["realizations"]):
-            pt = _best([r for r in e4_rows if (r["case"], float(r["mu"]), int(r["realization"]), int(r["n"]))
-                        == ("B", float(mu), real, s["n"]) and float(r["t1"]) >= float(s["t1_e4"])])
-            if pt is None or pt["result"] != "0" or done.find(float(mu), real, s["n"]):
-                continue
-            rod, t1 = RodChannel.reference(mu=mu), float(pt["t1"])
-            pert = make_perturbation("random-velocity", 15e-3, 6, jax.random.fold_in(jax.random.key(0), real))
-            row = dict(mu=float(mu), realization=real, n=s["n"], t1=t1)
-            for model, star, size in (("rod3d", float(pt["dF_star"]), s["n"]), ("field", float(pt["dF_star_field"]), 499)):
-                t0 = time.perf_counter()
-                sol = Scene(rod, 1.05 * star, pert, model, size).run(t1=t1, n_save=501)
-                if model == "rod3d":
-                    theta = np.asarray(sol.observables["theta"])[:, 1:-1]
-                    theta = theta[min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)]
-                else:
-                    theta = np.asarray(sol.q_final)
-                m, share, m2, share2 = _modes(theta, None)
-                pre = "" if model == "rod3d" else "field_"
-                row |= {pre + "dF_star": star, pre + "buckled": int(sol.buckled), pre + "t_stop": float(sol.t_stop),
-                        pre + "mode": m, pre + "share": share, pre + "second_mode": m2, pre + "second_share": share2,
-                        pre + "wall_s": round(time.perf_counter() - t0, 1)}
-            done.add(row)
-            if progress:
-                print(f"  E5 mu = {mu:g}, realization {real}: 3D mode {row['mode']} ({row['share']:.2f}), field mode "
-                      f"{row['field_mode']} ({row['field_share']:.2f})", flush=True)
+    mus = s["mus"] if mus is None else mus
+    e4_dir = os.path.join(os.path.dirname(os.path.abspath(out)), "e4")
+    e4(e4_dir, quick, progress, n, mus)
+    e4_rows = list(csv.DictReader(open(os.path.join(e4_dir, f"rod3d_n{s['n']}.csv"))))
+    path = os.path.join(out, f"rod3d_n{s['n']}.csv")
+    done = _Points(path, E5_COLUMNS, lambda r: (r["perturbation"], r["mu"], r["realization"], r["n"]))
+    for case in ("B", "C"):
+        kind, amplitude = E4_CASES[case]
+        for mu in mus:
+            for real in range(s["realizations"]):
+                pt = _best([r for r in e4_rows if (r["case"], float(r["mu"]), int(r["realization"]), int(r["n"]))
+                            == (case, float(mu), real, s["n"]) and float(r["t1"]) >= float(s["t1_e4"])])
+                if pt is None or pt["result"] != "0" or done.find(kind, float(mu), real, s["n"]):
+                    continue
+                row = dict(perturbation=kind, mu=float(mu), realization=real, n=s["n"], t1=float(pt["t1"]))
+                pert = make_perturbation(kind, amplitude, 6, jax.random.fold_in(jax.random.key(0), real))
+                # the field model on the nodes of its search (499 for a random velocity, else the default)
+                for model, star, size in (("rod3d", float(pt["dF_star"]), s["n"]),
+                                          ("field", float(pt["dF_star_field"]), 499 if case == "B" else None)):
+                    t0 = time.perf_counter()
+                    sol = Scene(RodChannel.reference(mu=mu), 1.05 * star, pert, model, size).run(t1=row["t1"],
+                                                                                                 n_save=501)
+                    if model == "rod3d":
+                        theta = np.asarray(sol.observables["theta"])[:, 1:-1]
+                        theta = theta[min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)]
+                    else:
+                        theta = np.asarray(sol.q_final)
+                    m, share, m2, share2 = _modes(theta, None)
+                    pre = "" if model == "rod3d" else "field_"
+                    row |= {pre + "dF_star": star, pre + "buckled": int(sol.buckled), pre + "t_stop": float(sol.t_stop),
+                            pre + "mode": m, pre + "share": share, pre + "second_mode": m2,
+                            pre + "second_share": share2, pre + "wall_s": round(time.perf_counter() - t0, 1)}
+                done.add(row)
+                if progress:
+                    print(f"  E5 {kind}, mu = {mu:g}, realization {real}: 3D mode {row['mode']} ({row['share']:.2f}), "
+                          f"field mode {row['field_mode']} ({row['field_share']:.2f})", flush=True)
     rows = [r for r in done.rows if int(r["n"]) == s["n"]]
-    out_rows = {}
-    for model, pre in (("rod3d", ""), ("field", "field_")):
-        ok = [r for r in rows if r[pre + "buckled"] == "1"]
-        out_rows[model] = {f"mu={m:g}": [int(r[pre + "mode"]) for r in ok if float(r["mu"]) == m] for m in s["mus"]}
+    res = dict(n=s["n"])
+    for kind in ("random-velocity", "random-position"):
+        for model, pre in (("rod3d", ""), ("field", "field_")):
+            ok = [r for r in rows if r["perturbation"] == kind and r[pre + "buckled"] == "1"]
+            res[f"{kind} {model}"] = {f"mu={m:g}": [int(r[pre + "mode"]) for r in ok if float(r["mu"]) == m]
+                                      for m in s["mus"]}
     _plot_e5(rows, path[:-4] + ".png", s["n"])
-    return dict(n=s["n"], dominant_mode=out_rows)
+    return res
 
 
 def _plot_e5(rows, path, n):
-    fig, ax = subplots(figsize=(6.4, 4.2))
-    for pre, label, mark in (("", f"3D rod, {n} segments", "o"), ("field_", "field model, 499 nodes", "s")):
-        ok = [r for r in rows if r[pre + "buckled"] == "1"]
-        ax.plot([float(r["mu"]) for r in ok], [int(r[pre + "mode"]) for r in ok], mark, mfc="none" if pre else None,
-                label=label)
-    ax.plot([0.05, 1.0], [6, 32], "k--", lw=0.8, label="the paper: 6 → 32 (random velocity)")
-    ax.set_xscale("log")
-    ax.set_xlabel("μ")
-    ax.set_ylabel("dominant mode at 1.05 ΔF*")
-    ax.set_title("E5 with the 3D rod: random velocity ±15 mm/s, each realization", fontsize=8)
-    ax.legend(fontsize=7)
+    fig, axes = subplots(1, 2, figsize=(11, 4.2))
+    for ax, kind, paper in zip(axes, ("random-velocity", "random-position"), (32, 21)):
+        for pre, label, mark in (("", f"3D rod, {n} segments", "o"), ("field_", "field model", "s")):
+            ok = [r for r in rows if r["perturbation"] == kind and r[pre + "buckled"] == "1"]
+            ax.plot([float(r["mu"]) for r in ok], [int(r[pre + "mode"]) for r in ok], mark,
+                    mfc="none" if pre else None, label=label)
+        ax.plot([0.05, 1.0], [6, paper], "k--", lw=0.8, label=f"the paper: 6 → {paper}")
+        ax.set_xscale("log")
+        ax.set_xlabel("μ")
+        ax.set_ylabel("dominant mode at 1.05 ΔF*")
+        ax.set_title(f"E5 with the 3D rod: {kind}, each realization", fontsize=8)
+        ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
 
