@@ -132,6 +132,24 @@ def _predicted_against_wide(n, dF):
     return pred["runs"], int(wide.evaluations)
 
 
+def test_predicted_3d_search_brackets_the_boundary_at_60_segments():
+    """E3's 3D search from the field model's v₀* (60 segments, 20 N, horizon 0.2 s) meets the
+    target of ≤ 10 runs to a bracket of 1 %, and plain runs of the scene (`Scene.run`, not the
+    search's label) hold its ends: stable at the bracket's low end, buckled at its high end."""
+    import jaxrod as jr
+    from jaxrod.experiments.e3_rod3d import boundary_3d
+    from jaxrod.perturbations import SineVelocity
+
+    pred = boundary_3d([20.0], n=60, rtol=0.01, t1=0.2, progress=False)["points"][0]
+    lo, hi = pred["bracket"]
+    assert pred["runs"] <= 10 and hi / lo - 1 <= 0.01
+    rod = jr.RodChannel.reference(0.3)
+    dt = jr.Scene(rod, 20.0, SineVelocity(1e-3), kind="rod3d", n=60).step()  # the search's step
+    ends = [bool(jr.Scene(rod, 20.0, SineVelocity(v0), kind="rod3d", n=60, dt=dt).run(t1=0.2, n_save=2).buckled)
+            for v0 in (lo, hi)]
+    assert ends == [False, True]
+
+
 @pytest.mark.slow  # 60 segments: 6 + 12 runs (~1.5 min)
 def test_predicted_3d_search_agrees_with_wide_bisection_at_60_segments():
     runs, wide = _predicted_against_wide(60, 20.0)

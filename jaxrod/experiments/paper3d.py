@@ -1,5 +1,5 @@
 """The paper's experiments with the paper's model: the 3D rod ([`jaxrod.rod3d`][]) at the paper's
-500 segments for E3, E4 A/B and E6C, beside the field model (`jaxrod reproduce e3 e4 e6
+500 segments for E3, E4, E5 and E6C, beside the field model (`jaxrod reproduce e3 e4 e5 e6
 --model rod3d [--n N]`; docs/paper.md, "The experiments with the 3D rod").
 
 Every search is label bisection of the 3D rod's runs (a run stops at its label: stuck, or past
@@ -8,22 +8,25 @@ the buckling threshold) to a relative bracket of 1 %, started from the field mod
 - **E3**: v₀*(ΔF) of the sine mode 6, μ = 0.3, a bracket ±4 % around the field model's v₀*,
   widened until two runs hold it (`e3_rod3d.boundary_3d`); the exponent of v₀* ∝ ΔF^p by least
   squares in log–log over all the loads, fixed before any run, beside the paper's −0.77.
-- **E4**: ΔF*(μ) of the sine 15 mm/s (A) and of random velocities ±15 mm/s (B, realization r:
-  key `fold_in(key(0), r)`), in a bracket a factor `WIDTH` either side of the field model's
-  ΔF* for the same perturbation (499 nodes, the random grid resolved); horizon 0.5 s. The 3D
-  rod never sticks (it rocks on the wall, rolling without slip), so a stable run lasts the whole
-  horizon: 2 s (the field model's search) costs 4× more and gave the same bracket (μ = 0.05,
-  realization 0, 500 segments: [1.939, 1.947] N at 2 s, [1.940, 1.953] N at 0.5 s).
+- **E4**: ΔF*(μ) of the sine 15 mm/s (A), of random velocities ±15 mm/s (B) and of random
+  positions (C: forces ±2 N/m for 1 ms; realization r: key `fold_in(key(0), r)`), in a bracket
+  a factor `WIDTH` either side of the field model's ΔF* for the same perturbation (for B on 499
+  nodes, the random grid resolved), squared while the bracket holds no boundary, up to
+  `WIDTH`⁴; horizon 0.5 s. The 3D rod never sticks (it rocks on the wall, rolling without
+  slip), so a stable run lasts the whole horizon: 2 s (the field model's search) costs 4× more
+  and gave the same bracket (μ = 0.05, realization 0, 500 segments: [1.939, 1.947] N at 2 s,
+  [1.940, 1.953] N at 0.5 s). 5 μ × 9 points: about 4 h at 500 segments on one core.
+- **E5**: on E4's points of B and C, one run of each model at 1.05 times its own ΔF*, with the
+  step of its search (near the boundary a 3D label can turn with a step 2·10⁻⁴ apart), and the
+  dominant mode of θ at the stop with its share of the power (a few seconds a run at 500
+  segments: the runs stop at buckling).
 - **E6C**: the random position (forces ±2 N/m for 1 ms, key 6 as `jaxrod reproduce e6`) at
   μ = 0.9: ΔF* (horizon 0.5 s, bracket a factor 4), then runs at 1.05 ΔF* and at the paper's
   40 N, and the largest modes of θ at the stop with their shares of the power of 40 modes.
 
 A sweep never loses finished work: E3 appends every run to `e3/rod3d_runs.csv` and replays it,
-E4 and E6C append every finished point to their CSV (with wall time, commit and date) and skip
-the points already there when the command runs again. E5 with the 3D rod is not a part: it
-needs a ΔF* search and a run at 1.05 ΔF* for each of 8 μ × 8 realizations × 2 perturbations, 128
-searches at about 6 min each at 500 segments on one core of this CPU (E4 with a 0.5-s horizon),
-about 13 h; E4 here (5 μ × 5 perturbations) is about 2.5 h.
+E4, E5 and E6C append every finished point to their CSV (with wall time, commit and date) and
+skip the points already there when the command runs again.
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ __all__ = ["e3", "e4", "e4_point", "e5", "e6c", "write_boundary", "SIZES", "WIDT
 
 WIDTH = 1.5
 E4_CASES = {"A": ("sine", 15e-3), "B": ("random-velocity", 15e-3), "C": ("random-position", 2.0)}
+FIELD_TOP = {"A": 100.0, "B": 100.0, "C": 300.0}  # the top of the field model's search bracket [N]
 PAPER_E3_EXPONENT = -0.77  # ../shared/PHYSICS.md §5 (results/paper/paper_numbers.json)
 SIZES = {
     False: dict(n=500, loads=(0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 40.0, 60.0), mus=(0.05, 0.1, 0.3, 0.5, 1.0),
@@ -155,7 +159,7 @@ def e4_point(case, mu, realization, n, t1=0.5, width=WIDTH, rtol=1e-2) -> dict:
     rod = RodChannel.reference(mu=mu)
     kind, amplitude = E4_CASES[case]
     key = jax.random.fold_in(jax.random.key(0), realization)
-    f, sec_f = _critical_load(rod, amplitude, kind, key, "field", None, t1, (0.01, 300.0), None)
+    f, sec_f = _critical_load(rod, amplitude, kind, key, "field", None, t1, (0.01, FIELD_TOP[case]), None)
     f = float(f.root)
     r, sec = _critical_load(rod, amplitude, kind, key, "rod3d", n, t1, (f / width, f * width), rtol)
     return dict(case=case, mu=float(mu), realization=realization, n=n, t1=float(t1), width=width, dF_star_field=f,
@@ -278,12 +282,14 @@ def e5(out, quick=False, progress=True, n=None, mus=None) -> dict:
                     continue
                 row = dict(perturbation=kind, mu=float(mu), realization=real, n=s["n"], t1=float(pt["t1"]))
                 pert = make_perturbation(kind, amplitude, 6, jax.random.fold_in(jax.random.key(0), real))
-                # the field model on the nodes of its search (499 for a random velocity, else the default)
-                for model, star, size in (("rod3d", float(pt["dF_star"]), s["n"]),
-                                          ("field", float(pt["dF_star_field"]), 499 if case == "B" else None)):
+                # each model on the nodes and the step of its search (whose step is that of the bracket's
+                # top): near the boundary a 3D label can turn with a step 2e-4 apart
+                rod, f = RodChannel.reference(mu=mu), float(pt["dF_star_field"])
+                for model, star, size, top in (("rod3d", float(pt["dF_star"]), s["n"], f * float(pt["width"])),
+                                               ("field", f, 499 if case == "B" else None, FIELD_TOP[case])):
                     t0 = time.perf_counter()
-                    sol = Scene(RodChannel.reference(mu=mu), 1.05 * star, pert, model, size).run(t1=row["t1"],
-                                                                                                 n_save=501)
+                    dt = Scene(rod, top, make_perturbation(kind, 1.0, 6), model, size).step()  # as the search's
+                    sol = Scene(rod, 1.05 * star, pert, model, size, 6, dt).run(t1=row["t1"], n_save=501)
                     if model == "rod3d":
                         theta = np.asarray(sol.observables["theta"])[:, 1:-1]
                         theta = theta[min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)]

@@ -113,34 +113,55 @@ e4_3d = [q for q in csv.DictReader(open(e4_3d_path)) if q["result"] == "0"] if o
 # one point per (case, μ, realization): the one on the longest horizon (a run stable for longer is stable for less)
 e4_3d = list({(q["case"], float(q["mu"]), q["realization"]): q
               for q in sorted(e4_3d, key=lambda q: float(q["t1"]))}.values())
-fits_3d = None
+fits_3d = {}
+E4_3D_NAMES = {"A": "sine", "B": "random velocity", "C": "random position"}
 if e4_3d:
-    parts, means = [], {"A": [], "B": [], "field A": [], "field B": []}
-    mus_3d = sorted({float(q["mu"]) for q in e4_3d if q["case"] == "A"} & {float(q["mu"]) for q in e4_3d if q["case"] == "B"})
+    parts = []
     for m in sorted({float(q["mu"]) for q in e4_3d}):
-        a = [q for q in e4_3d if float(q["mu"]) == m and q["case"] == "A"]
-        b = [q for q in e4_3d if float(q["mu"]) == m and q["case"] == "B"]
-        rod, field = [float(q["dF_star"]) for q in b], [float(q["dF_star_field"]) for q in b]
-        part = [f"sine {float(a[0]['dF_star']):.2f} (field {float(a[0]['dF_star_field']):.2f})"] if a else []
-        if b:
-            part.append(f"random {np.mean(rod):.2f}" + (f" ({min(rod):.2f}–{max(rod):.2f})" if len(b) > 1 else "")
-                        + f" (field {np.mean(field):.2f}), {len(b)} realization{'s' if len(b) > 1 else ''}")
+        part = []
+        for case, name in E4_3D_NAMES.items():
+            qs = [q for q in e4_3d if float(q["mu"]) == m and q["case"] == case]
+            rod, field = [float(q["dF_star"]) for q in qs], [float(q["dF_star_field"]) for q in qs]
+            if qs:
+                part.append(f"{name} {np.mean(rod):.2f}" + (f" ({min(rod):.2f}–{max(rod):.2f})" if len(qs) > 1 else "")
+                            + f" (field {np.mean(field):.2f})")
         parts.append(f"μ = {m:g}: " + "; ".join(part))
-        if m in mus_3d:
-            for case, qs in (("A", a), ("B", b)):
-                means[case].append(np.mean([float(q["dF_star"]) for q in qs]))
-                means["field " + case].append(np.mean([float(q["dF_star_field"]) for q in qs]))
-    rows.append(("E4 δF* of the 3D rod at 500 segments [N]: sine 15 mm/s / random velocity ±15 mm/s, the mean over "
-                 "the realizations (their range)", "—", " · ".join(parts), "rod3d, 500 segments / field",
-                 "jaxrod reproduce e4 --model rod3d"))
-    if len(mus_3d) > 2:
-        fits = fits_3d = {k: fit(mus_3d, v) for k, v in means.items()}
-        rows.append((f"E4 δF ∝ μ^p of the 3D rod at 500 segments (μ {mus_3d[0]:g}–{mus_3d[-1]:g}, {len(mus_3d)} points, "
-                     "random: the mean over the realizations)", "—",
-                     "; ".join(f"{name} {fits[k][0]:.2f} ± {fits[k][1]:.2f} (field, the same points, "
-                               f"{fits['field ' + k][0]:.2f} ± {fits['field ' + k][1]:.2f})"
-                               for k, name in (("A", "sine 15 mm/s"), ("B", "random velocity"))),
+    n_real = max(int(q["realization"]) for q in e4_3d) + 1
+    rows.append(("E4 δF* of the 3D rod at 500 segments [N]: sine 15 mm/s / random velocity ±15 mm/s / random position "
+                 f"±2 N/m, 1 ms; the random ones: the mean over {n_real} realizations (their range)", "—",
+                 " · ".join(parts), "rod3d, 500 segments / field", "jaxrod reproduce e4 --model rod3d"))
+    for case in E4_3D_NAMES:  # δF ∝ μ^p by the field model's fit (least squares in log-log, all μ)
+        ms = sorted({float(q["mu"]) for q in e4_3d if q["case"] == case})
+        if len(ms) > 2:
+            mean = {k: [np.mean([float(q[k]) for q in e4_3d if q["case"] == case and float(q["mu"]) == m]) for m in ms]
+                    for k in ("dF_star", "dF_star_field")}
+            fits_3d[case] = (fit(ms, mean["dF_star"]), fit(ms, mean["dF_star_field"]), ms)
+    if fits_3d:
+        rows.append(("E4 δF ∝ μ^p of the 3D rod at 500 segments (least squares in log-log over its μ; the random ones: "
+                     "the mean over the realizations)", "—",
+                     "; ".join(f"{E4_3D_NAMES[k]} {f3[0]:.2f} ± {f3[1]:.2f} (field, the same points, {ff[0]:.2f} ± "
+                               f"{ff[1]:.2f}; μ {ms[0]:g}–{ms[-1]:g})" for k, (f3, ff, ms) in fits_3d.items()),
                      "rod3d, 500 segments / field", "jaxrod reproduce e4 --model rod3d"))
+# E5 with the 3D rod on E4's points (jaxrod reproduce e5 --model rod3d; results/paper/e5/rod3d_n500.csv)
+e5_3d_path = os.path.join(here, "e5", "rod3d_n500.csv")
+e5_3d = list(csv.DictReader(open(e5_3d_path))) if os.path.exists(e5_3d_path) else []
+e5_3d_modes = {}  # kind: (μ, mean, s.d. over the buckled realizations) of the 3D rod's dominant mode
+for kind in ("random-velocity", "random-position"):
+    qs = [q for q in e5_3d if q["perturbation"] == kind]
+    if not qs:
+        continue
+    parts = []
+    for m in sorted({float(q["mu"]) for q in qs}):
+        at = [q for q in qs if float(q["mu"]) == m]
+        rod = [int(q["mode"]) for q in at if q["buckled"] == "1"]
+        field = [int(q["field_mode"]) for q in at if q["field_buckled"] == "1"]
+        share = [float(q["share"]) for q in at if q["buckled"] == "1"]
+        e5_3d_modes.setdefault(kind, []).append((m, np.mean(rod), np.std(rod)))
+        parts.append(f"μ = {m:g}: {np.mean(rod):.1f}" + (f" ({min(share):.2f}–{max(share):.2f})" if rod else "")
+                     + f" / {np.mean(field):.1f}" + (f" ({len(rod)} of {len(at)} buckled)" if len(rod) < len(at) else ""))
+    rows.append((f"E5 dominant mode of the 3D rod at 500 segments, {kind}: mean over the realizations at 1.05 ΔF* "
+                 "(the 3D rod's power share) / the field model's on the same realizations", "rises with μ; ≥ 6",
+                 "; ".join(parts), "rod3d, 500 segments / field", "jaxrod reproduce e5 --model rod3d"))
 if "e5" in r:
     e5 = r["e5"]
     for kind in ("random-velocity", "random-position"):
@@ -341,17 +362,21 @@ if e4_3d:
                   if ratios else "the sine not run at 500 segments: compare the field model's row (A)"))
 if fits_3d:
     verdicts = []
-    for k, key in (("A", "E4 A exponent 15 mm/s"), ("B", "E4 B exponent")):
-        ok, by = against(*fits_3d[k], key)
-        verdicts.append(f"{'sine' if k == 'A' else 'random'} {'agrees' if ok else 'departs'}: {by}")
-    PAPER.append(("E4 δF ∝ μ^p of the 3D rod", cite("E4 A exponent 15 mm/s") + "; " + cite("E4 B exponent"),
-                  "; ".join(verdicts) + " (A)"))
+    for k, key in (("A", "E4 A exponent 15 mm/s"), ("B", "E4 B exponent"), ("C", "E4 C exponent")):
+        if k in fits_3d:
+            ok, by = against(*fits_3d[k][0], key)
+            verdicts.append(f"{E4_3D_NAMES[k]} {'agrees' if ok else 'departs'}: {by}")
+    PAPER.append(("E4 δF ∝ μ^p of the 3D rod", "; ".join(cite(key) for k, key in (
+        ("A", "E4 A exponent 15 mm/s"), ("B", "E4 B exponent"), ("C", "E4 C exponent")) if k in fits_3d),
+        "; ".join(verdicts) + " (A)"))
 
 
 def modes_against(a, s_, b):
     """jaxrod's mean dominant mode a (s.d. s_ over the realizations) beside the paper's b."""
     if abs(a - b) <= s_:
         return f"{a:.1f} ± {s_:.1f} vs {b}: agrees"
+    if s_ == 0:
+        return f"{a:.1f} in every realization vs {b}: {a - b:+.1f} modes"
     return f"{a:.1f} ± {s_:.1f} vs {b}: {a - b:+.1f} modes ({abs(a - b) / s_:.1f} s.d. of the realizations)"
 
 
@@ -364,6 +389,14 @@ if "e5" in r:
         PAPER.append((f"E5 dominant mode vs μ (0.05 → 1), {kind}", cite(key),
                       (f"{rises}; μ = 1: {modes_against(m[-1], sd[-1], hi)}; μ = 0.05: {modes_against(m[0], sd[0], lo)}; "
                        f"open at μ = 0.05{extra}")))
+for kind, key in (("random-velocity", "E5 random velocity"), ("random-position", "E5 random position")):
+    if kind in e5_3d_modes:
+        (m0, a0, s0), (m1, a1, s1) = e5_3d_modes[kind][0], e5_3d_modes[kind][-1]
+        a = [x[1] for x in e5_3d_modes[kind]]
+        rises = "rises" if np.all(np.diff(a) > 0) else "does not rise monotonically (the paper's does)"
+        PAPER.append((f"E5 dominant mode of the 3D rod at 500 segments, {kind}", cite(key),
+                      f"{rises}; μ = {m1:g}: {modes_against(a1, s1, P[key]['value'][1])}; μ = {m0:g}: "
+                      f"{modes_against(a0, s0, P[key]['value'][0])}"))
 PAPER += [
     ("convergence in n", "—", "converged (≤ 1 % between the two finest n)"),
     ("E1 critical force (peak reaction), μ = 0.0", cite("E1 frictionless"), "departs: delayed bifurcation (B)"),
