@@ -168,3 +168,21 @@ def test_a_failed_run_ends_a_search_instead_of_counting_as_stable():
     assert float(r.lo) == pytest.approx(0.01) and float(r.hi) == pytest.approx(4.0)
     ok = bd.departure_secant(ev, 0.01, 4.0, 1e3, start=2.0, rtol=1e-6)
     assert int(ok.result) == 0 and float(ok.root) == pytest.approx(c, rel=1e-5)
+
+
+
+def test_critical_load_brackets_to_rtol_in_the_load():
+    """The load search runs on log ΔF, where a relative `rtol` in ΔF is an absolute log1p(rtol):
+    the field model's label bisection at a load of tens of N ends with a bracket of relative
+    width ≤ rtol (not rtol·|log ΔF|, 3.4·rtol at 30 N), and a label with its root at 1 N
+    (log ΔF* = 0, where a tolerance relative to log ΔF never closes) converges like any other."""
+    rod = jr.RodChannel.reference(mu=1.0)
+    res, _ = bd.critical_load(rod, 15e-3, model="field", n=16, method="bisection", bracket=(5.0, 200.0),
+                              rtol=1e-2, t1=0.3, sensitivities=())
+    assert int(res.result) == 0 and float(res.lo) > 5.0 and float(res.hi) / float(res.lo) - 1 <= 1e-2
+    for target in (1.0, 30.0):
+        lab = lambda y, t=target: y > math.log(t)  # a label with its root at `target` [N], on log ΔF
+        r = bd.bisection(lab, math.log(target / 1.5), math.log(target * 1.5), 0.0, 60, geometric=False,
+                         atol=math.log1p(1e-2))
+        lo, hi = math.exp(float(r.lo)), math.exp(float(r.hi))
+        assert int(r.result) == 0 and lo <= target <= hi and hi / lo - 1 <= 1e-2

@@ -65,14 +65,16 @@ def safeguarded_newton(
     max_iter: int = 30,
     geometric: bool = True,
     start: str = "hi",
+    atol: float = 0.0,
 ) -> RootResult:
     """Find x in [`lo`, `hi`] with g(x) = 0, where g(lo) ≤ 0 < g(hi).
 
     Newton steps x − g/g′ (g′ by `jax.jvp`), replaced by a bisection step whenever they leave
     the current bracket or are not finite; the bracket is updated by the sign of g at every
     evaluation. Stops — before evaluating again — when the next Newton step would be smaller
-    than `rtol`·|x| (the root is then that Newton point, whose error is of the order of the
-    step squared) or the bracket is narrower than `rtol`·|x|.
+    than `rtol`·|x| + `atol` (the root is then that Newton point, whose error is of the order of
+    the step squared) or the bracket is narrower than `rtol`·|x| + `atol` (`atol` for a search in
+    log x, where a relative tolerance on x is an absolute one on log x).
 
     **Arguments:** `g` (scalar → scalar, forward-differentiable), the bracket, `rtol`,
     `max_iter` (evaluations after the two bracket checks), `geometric` (bisect in log space
@@ -100,14 +102,14 @@ def safeguarded_newton(
         # an infinite or zero derivative (overflowing growth, a flat capped indicator) gives no
         # usable Newton step: bisect instead, and never read it as convergence
         ok = jnp.isfinite(newton) & jnp.isfinite(dx) & (dx != 0) & (newton >= lo) & (newton <= hi)
-        small = ok & ((jnp.abs(newton - x) <= rtol * jnp.abs(x)) | (gx == 0))
+        small = ok & ((jnp.abs(newton - x) <= (rtol * jnp.abs(x) + atol)) | (gx == 0))
         return newton, ok, small
 
     # state: x, g(x), g'(x), lo, hi, evaluations after the bracket checks
     def cond(s):
         x, gx, dx, lo, hi, n = s
         _, _, small = newton_of(x, gx, dx, lo, hi)
-        narrow = (hi - lo) <= rtol * jnp.abs(x)
+        narrow = (hi - lo) <= (rtol * jnp.abs(x) + atol)
         return valid & (n < max_iter) & ~small & ~narrow & jnp.isfinite(gx)
 
     def body(s):
@@ -122,7 +124,7 @@ def safeguarded_newton(
 
     x, gx, dx, lo, hi, n = jax.lax.while_loop(cond, body, (x, gx, dx, lo, hi, jnp.array(0)))
     newton, _, small = newton_of(x, gx, dx, lo, hi)
-    narrow = (hi - lo) <= rtol * jnp.abs(x)
+    narrow = (hi - lo) <= (rtol * jnp.abs(x) + atol)
     converged = small | narrow
     root = jnp.where(small, newton, _mid(lo, hi, False))
     result = jnp.where(
@@ -149,6 +151,7 @@ def departure_secant(
     max_iter: int = 40,
     geometric: bool = True,
     confirm: bool = False,
+    atol: float = 0.0,
 ) -> RootResult:
     """The boundary x* in [`lo`, `hi`] from runs that stop as soon as their label is known:
     `evaluate(x)` returns `(label, u)` with u ≈ λ·(x − x*) > 0 for a buckled run (see
@@ -162,8 +165,8 @@ def departure_secant(
     one; the step then stops short
     of the root and stays on the buckled side) while only one is known or the secant slope is
     not positive. A step that leaves the bracket (the largest stable x, the smallest buckled x)
-    becomes a bisection. Stops when the next step would be smaller than `rtol`·x₁ (the root is
-    that step's end) or the bracket is narrower than `rtol`·x.
+    becomes a bisection. Stops when the next step would be smaller than `rtol`·x₁ + `atol` (the
+    root is that step's end) or the bracket is narrower than `rtol`·x + `atol`.
 
     `lo` and `hi` are trusted, not run (a stable `lo` is run only when the iteration ends next
     to it, so that a bracket without the root is reported); the first run is at `start`
@@ -189,7 +192,7 @@ def departure_secant(
         lam = bound(jnp.where(have1, x1, hi))
         s = jnp.where(have2 & (secant > 0) & jnp.isfinite(secant), jnp.minimum(secant, lam), lam)
         c = x1 - u1 / s
-        small = have1 & (jnp.abs(x1 - c) <= rtol * jnp.abs(x1))
+        small = have1 & (jnp.abs(x1 - c) <= (rtol * jnp.abs(x1) + atol))
         # aim a little short of the predicted root: an overshoot costs a run that only moves lo
         aim = x1 - (1 - _SHORT) * u1 / s
         # after an overshoot the root lies just above lo: step a fraction of the way back up
@@ -222,14 +225,14 @@ def departure_secant(
         lo = jnp.where(buckled | failed, lo, jnp.maximum(lo, x))
         lo_run = lo_run | (~buckled & ~failed & (x <= lo_bound))
         c, small, s = candidate(lo, hi, x1, u1, x2, u2, was_stable & ~buckled)
-        narrow = (hi - lo) <= rtol * jnp.abs(hi)
+        narrow = (hi - lo) <= (rtol * jnp.abs(hi) + atol)
         # ending next to an untested lower end: run it once, to tell a root from a bad bracket
         unconfirmed = small & ~narrow if confirm else jnp.zeros_like(small)  # no stable run holds it yet
         accepted = (small & ~unconfirmed) | narrow
         check_lo = accepted & (lo <= lo_bound) & ~lo_run
         finished = invalid | failed | (accepted & ~check_lo)
         root = jnp.where(small, c, _mid(lo, hi, False))
-        x_next = jnp.where(check_lo, lo_bound, jnp.where(unconfirmed, x1 - 0.9 * rtol * jnp.abs(x1), c))
+        x_next = jnp.where(check_lo, lo_bound, jnp.where(unconfirmed, x1 - 0.9 * (rtol * jnp.abs(x1) + atol), c))
         return x_next, lo, hi, x1, u1, x2, u2, lo_run, n, finished, invalid, root, s, ~buckled, failed
 
     inf = jnp.asarray(jnp.inf, dtype)
@@ -246,8 +249,9 @@ def departure_secant(
     return RootResult(root, lo, jnp.minimum(hi, x1), u1, s, n.astype(jnp.int32), result)
 
 
-def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bool = True) -> RootResult:
-    """Plain bisection on the sign of g (the baseline; no derivatives), to `rtol`·|x|. `g` may
+def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bool = True,
+              atol: float = 0.0) -> RootResult:
+    """Plain bisection on the sign of g (the baseline; no derivatives), to `rtol`·|x| + `atol`. `g` may
     return a boolean label (True: above the root). A NaN value (a failed run, see
     [`jaxrod.boundary.crossing_state`][]) ends the search with `ROOT_RESULTS.nonfinite` and the
     bracket known so far: it says nothing about the side of the root."""
@@ -266,7 +270,7 @@ def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bo
 
     def cond(s):
         lo, hi, n, gx = s
-        return (hi - lo > rtol * jnp.abs(hi)) & (n < max_iter) & valid & jnp.isfinite(gx)
+        return (hi - lo > (rtol * jnp.abs(hi) + atol)) & (n < max_iter) & valid & jnp.isfinite(gx)
 
     def body(s):
         lo, hi, n, _ = s
@@ -275,7 +279,7 @@ def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bo
         return jnp.where(gx <= 0, x, lo), jnp.where(gx > 0, x, hi), n + 1, gx
 
     lo, hi, n, gx = jax.lax.while_loop(cond, body, (lo, hi, jnp.array(0), jnp.where(finite, g_hi, jnp.nan)))
-    ok = hi - lo <= rtol * jnp.abs(hi)
+    ok = hi - lo <= (rtol * jnp.abs(hi) + atol)
     result = jnp.where(~jnp.isfinite(gx), ROOT_RESULTS.nonfinite, jnp.where(
         ~valid, ROOT_RESULTS.invalid_bracket,
         jnp.where(ok, ROOT_RESULTS.converged, ROOT_RESULTS.max_iterations))).astype(jnp.int32)

@@ -10,6 +10,8 @@ made of its neighbours' roots (`continuation=True`), or all points at once (vmap
 
 from __future__ import annotations
 
+import math
+
 
 import equinox as eqx
 import jax
@@ -85,13 +87,13 @@ def _label(scene_of, t1):
     return lambda x: crossing_state(scene_of(x), t1)[1]
 
 
-def _search(scene_of, lo, hi, lam, method, start, rtol, max_iter, t1, geometric, confirm=False):
+def _search(scene_of, lo, hi, lam, method, start, rtol, max_iter, t1, geometric, confirm=False, atol=0.0):
     """The root of the label of `scene_of(x)` in [lo, hi] by `method` (`confirm`: see
     `departure_secant`; the 3D rod's departure rate is not linear within 1 % of its root)."""
     if method == "bisection":
-        return _named(bisection(_label(scene_of, t1), lo, hi, rtol, max_iter, geometric=geometric))
+        return _named(bisection(_label(scene_of, t1), lo, hi, rtol, max_iter, geometric=geometric, atol=atol))
     return departure_secant(lambda x: departure_rate(scene_of, x, t1), lo, hi, lam, start=start,
-                            rtol=rtol, max_iter=max_iter, geometric=geometric, confirm=confirm)
+                            rtol=rtol, max_iter=max_iter, geometric=geometric, confirm=confirm, atol=atol)
 
 
 def critical_velocity(
@@ -180,7 +182,8 @@ def critical_load(
     perturbations) just buckles the rod (the root of the label in ΔF).
 
     The bracket [N] must be positive; the search runs on log ΔF (`start` [N], `value` and
-    `derivative` of the result refer to that variable). Models and methods as
+    `derivative` of the result refer to that variable) to a bracket of relative width `rtol` in
+    ΔF (log1p(`rtol`) in log ΔF, whatever the load). Models and methods as
     [`jaxrod.boundary.critical_velocity`][].
 
     **Returns:** `(RootResult, sensitivities)`, root in N, with dΔF*/dp for p in
@@ -196,6 +199,7 @@ def critical_load(
     # Loads span decades and the runs depend on them through λ ∝ √ΔF: search log ΔF.
     lo, hi = jnp.log(jnp.asarray(bracket[0], dtype)), jnp.log(jnp.asarray(bracket[1], dtype))
     y0 = None if start is None else jnp.log(jnp.asarray(start, dtype))
+    log_tol = math.log1p(rtol)  # a bracket of relative width `rtol` in ΔF is one of log1p(rtol) in log ΔF
     to_load = lambda res: eqx.tree_at(lambda r: (r.root, r.lo, r.hi), res,
                                       (jnp.exp(res.root), jnp.exp(res.lo), jnp.exp(res.hi)))
 
@@ -206,8 +210,8 @@ def critical_load(
             m = SingleMode.from_rod(r, mode, F=F)
             return single_mode_indicator(p["amplitude"] / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
 
-        res = _named(to_load(safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, rtol, max_iter,
-                                                geometric=False)))
+        res = _named(to_load(safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, 0.0, max_iter,
+                                                geometric=False, atol=log_tol)))
         sub = {k: params[k] for k in sensitivities}
         sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub) if sub else {}
         return res, sens
@@ -216,8 +220,8 @@ def critical_load(
     scene_of2 = lambda dF, p: _scene(rod_of(p), dF, p["amplitude"], model, n, mode, dt, perturbation, key)
     F0 = theory.reference_load(rod)
     lam = lambda y: theory.max_growth_rate(rod, F0 + jnp.exp(y))
-    res = to_load(_search(lambda y: scene_of2(jnp.exp(y), params), lo, hi, lam, method, y0, rtol, max_iter,
-                          t1, False, model == "rod3d"))
+    res = to_load(_search(lambda y: scene_of2(jnp.exp(y), params), lo, hi, lam, method, y0, 0.0, max_iter,
+                          t1, False, model == "rod3d", atol=log_tol))
     sub = {k: params[k] for k in sensitivities}
     sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
     return res, sens
