@@ -51,8 +51,8 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
     `lockup`, beyond the paper and hours long in its full setting, only by name), write figures, CSV
     and `results.json` under `out`; returns the dict written. `quick`: `False` (the full run),
     `True` (coarser, fewer realizations: minutes) or `"tiny"` (the test suite's structure check).
-    `model="rod3d"`: E3, E4, E5 (random velocity) and E6 (its part C) with the 3D rod of `n` segments (default 500;
-    [`jaxrod.experiments.paper3d`][]), recorded as `e3_rod3d`, ... in `results.json`."""
+    `model="rod3d"`: E3, E4, E5 and E6 (its part C) with the 3D rod of `n` segments (default
+    500; [`jaxrod.experiments.paper3d`][]), recorded as `e3_rod3d`, ... in `results.json`."""
     import jax
 
     which = [which] if isinstance(which, str) else list(which)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp

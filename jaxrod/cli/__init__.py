@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--out", default="results/paper")
     rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
     rp.add_argument("--model", choices=["field", "rod3d"], default="field",
-                    help="rod3d: E3, E4, E5 (random velocity) and E6C with the 3D rod "
+                    help="rod3d: E3, E4, E5 and E6C with the 3D rod "
                          "(jaxrod.experiments.paper3d; hours at 500 segments)")
     rp.add_argument("--n", type=_positive_int, default=None, help="segments of the 3D rod (default 500; 60 with --quick)")
     rp.add_argument("--quiet", action="store_true")

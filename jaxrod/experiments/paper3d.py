@@ -174,7 +174,7 @@ def _best(rows):
 
 
 def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
-    """E4 A and B with the 3D rod at `n` segments: `rod3d_n{n}.csv` (one row per point) and
+    """E4 A, B and C with the 3D rod at `n` segments: `rod3d_n{n}.csv` (one row per point) and
     `.png` (ΔF* against μ, both models) under `out`; `mus` a subset of the setting's μ to run.
 
     A point found in the CSV on the setting's horizon or a longer one is not run again (a run
@@ -186,17 +186,12 @@ def e4(out, quick=False, progress=True, n=None, mus=None) -> dict:
     s = _settings(quick, n)
     path = os.path.join(out, f"rod3d_n{s['n']}.csv")
     os.makedirs(out, exist_ok=True)
-    done = _Points(path, E4_COLUMNS, lambda r: (r["case"], r["mu"], r["realization"], r["n"]))
-    t1 = float(s["t1_e4"])
-
-    def found(*k):
-        return _best([r for r in done.find(*k) if float(r["t1"]) >= t1])
-
+    done = _e4_points(path)
     cases = [("A", 0)] + [(c, r) for c in ("B", "C") for r in range(s["realizations"])]
     rows = []
     for mu in s["mus"] if mus is None else mus:
         for case, real in cases:
-            row = found(case, float(mu), real, s["n"])
+            row = _found(done, float(s["t1_e4"]), case, float(mu), real, s["n"])
             outside = row is not None and row["result"] == str(ROOT_RESULTS.invalid_bracket)
             if row is not None and not (outside and float(row["width"] or 0) < WIDTH ** 4):
                 rows.append(row)
@@ -254,6 +249,22 @@ def _modes(theta, n_modes=40):
     return int(order[0]) + 1, float(p[order[0]]), int(order[1]) + 1, float(p[order[1]])
 
 
+def _theta_3d(sol):
+    """The 3D rod's lateral angle θ at its interior nodes over the saved times, and the index of
+    the save at its stop."""
+    theta = np.asarray(sol.observables["theta"])[:, 1:-1]
+    return theta, min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)
+
+
+def _found(points, t1, *key):
+    """The row of E4 point `key` (case, μ, realization, n) on a horizon ≥ `t1`, by `_best`."""
+    return _best([r for r in points.find(*key) if float(r["t1"]) >= t1])
+
+
+def _e4_points(path):
+    return _Points(path, E4_COLUMNS, lambda r: (r["case"], r["mu"], r["realization"], r["n"]))
+
+
 def e5(out, quick=False, progress=True, n=None, mus=None) -> dict:
     """E5 with the 3D rod at `n` segments, on E4's points (run first where missing, under
     `out`/../e4): for each random perturbation (E4's B and C), μ and realization, one run of each
@@ -269,15 +280,14 @@ def e5(out, quick=False, progress=True, n=None, mus=None) -> dict:
     mus = s["mus"] if mus is None else mus
     e4_dir = os.path.join(os.path.dirname(os.path.abspath(out)), "e4")
     e4(e4_dir, quick, progress, n, mus)
-    e4_rows = list(csv.DictReader(open(os.path.join(e4_dir, f"rod3d_n{s['n']}.csv"))))
+    e4_done = _e4_points(os.path.join(e4_dir, f"rod3d_n{s['n']}.csv"))
     path = os.path.join(out, f"rod3d_n{s['n']}.csv")
     done = _Points(path, E5_COLUMNS, lambda r: (r["perturbation"], r["mu"], r["realization"], r["n"]))
     for case in ("B", "C"):
         kind, amplitude = E4_CASES[case]
         for mu in mus:
             for real in range(s["realizations"]):
-                pt = _best([r for r in e4_rows if (r["case"], float(r["mu"]), int(r["realization"]), int(r["n"]))
-                            == (case, float(mu), real, s["n"]) and float(r["t1"]) >= float(s["t1_e4"])])
+                pt = _found(e4_done, float(s["t1_e4"]), case, float(mu), real, s["n"])
                 if pt is None or pt["result"] != "0" or done.find(kind, float(mu), real, s["n"]):
                     continue
                 row = dict(perturbation=kind, mu=float(mu), realization=real, n=s["n"], t1=float(pt["t1"]))
@@ -291,8 +301,8 @@ def e5(out, quick=False, progress=True, n=None, mus=None) -> dict:
                     dt = Scene(rod, top, make_perturbation(kind, 1.0, 6), model, size).step()  # as the search's
                     sol = Scene(rod, 1.05 * star, pert, model, size, 6, dt).run(t1=row["t1"], n_save=501)
                     if model == "rod3d":
-                        theta = np.asarray(sol.observables["theta"])[:, 1:-1]
-                        theta = theta[min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)]
+                        theta, i = _theta_3d(sol)
+                        theta = theta[i]
                     else:
                         theta = np.asarray(sol.q_final)
                     m, share, m2, share2 = _modes(theta, None)
@@ -362,8 +372,7 @@ def e6c(out, quick=False, progress=True, n=None) -> dict:
                 continue
             t0 = time.perf_counter()
             sol = Scene(rod, dF, pert, "rod3d", s["n"]).run(t1=t1, n_save=501)
-            theta = np.asarray(sol.observables["theta"])[:, 1:-1]
-            i = min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)
+            theta, i = _theta_3d(sol)
             m, share, m2, share2 = _modes(theta[i])
             done.add(dict(n=s["n"], case=case, dF=dF, dF_star_field=f, dF_star=star, dF_star_lo=float(r.lo),
                           dF_star_hi=float(r.hi), search_runs=int(r.evaluations), search_result=int(r.result),

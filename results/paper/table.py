@@ -115,6 +115,7 @@ e4_3d = list({(q["case"], float(q["mu"]), q["realization"]): q
               for q in sorted(e4_3d, key=lambda q: float(q["t1"]))}.values())
 fits_3d = {}
 E4_3D_NAMES = {"A": "sine", "B": "random velocity", "C": "random position"}
+E4_3D_PAPER = {"A": "E4 A exponent 15 mm/s", "B": "E4 B exponent", "C": "E4 C exponent"}  # paper_numbers.json
 if e4_3d:
     parts = []
     for m in sorted({float(q["mu"]) for q in e4_3d}):
@@ -362,13 +363,11 @@ if e4_3d:
                   if ratios else "the sine not run at 500 segments: compare the field model's row (A)"))
 if fits_3d:
     verdicts = []
-    for k, key in (("A", "E4 A exponent 15 mm/s"), ("B", "E4 B exponent"), ("C", "E4 C exponent")):
-        if k in fits_3d:
-            ok, by = against(*fits_3d[k][0], key)
-            verdicts.append(f"{E4_3D_NAMES[k]} {'agrees' if ok else 'departs'}: {by}")
-    PAPER.append(("E4 δF ∝ μ^p of the 3D rod", "; ".join(cite(key) for k, key in (
-        ("A", "E4 A exponent 15 mm/s"), ("B", "E4 B exponent"), ("C", "E4 C exponent")) if k in fits_3d),
-        "; ".join(verdicts) + " (A)"))
+    for k, (fit_3d, _, _) in fits_3d.items():
+        ok, by = against(*fit_3d, E4_3D_PAPER[k])
+        verdicts.append(f"{E4_3D_NAMES[k]} {'agrees' if ok else 'departs'}: {by}")
+    PAPER.append(("E4 δF ∝ μ^p of the 3D rod", "; ".join(cite(E4_3D_PAPER[k]) for k in fits_3d),
+                  "; ".join(verdicts) + " (A)"))
 
 
 def modes_against(a, s_, b):
