@@ -9,7 +9,7 @@ PKG = pathlib.Path(__file__).parent.parent / "jaxrod"
 
 # Bottom to top. A module may import from its own layer or below, never above.
 LAYERS = [
-    ["_results", "_version", "_xla", "_cache", "_numerics", "_trig", "params", "friction", "loads", "modal", "solution", "batching", "search", "output",
+    ["_results", "_version", "_xla", "_cache", "_numerics", "_trig", "_banded", "params", "friction", "loads", "modal", "solution", "batching", "search", "output",
      "distributed"],
     ["theory", "lockup"],
     ["models", "rod3d.so3", "rod3d.model", "rod3d"],

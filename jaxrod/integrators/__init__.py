@@ -8,6 +8,7 @@ from .explicit import SplitLinearFriction as SplitLinearFriction
 from .explicit import SymplecticEuler as SymplecticEuler
 from .verlet import ProjectedVerlet as ProjectedVerlet
 from .leapfrog import ProjectedLeapfrog as ProjectedLeapfrog
+from .implicit import ImplicitLeapfrog as ImplicitLeapfrog
 
 if TYPE_CHECKING:  # imported on first use: diffrax takes 0.7 s to import (`__getattr__`)
     from .smooth import DiffraxSmooth as DiffraxSmooth
@@ -21,7 +22,7 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-SCHEMES = {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet}
+SCHEMES = {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet, "implicit": ImplicitLeapfrog}
 """The projected schemes by the name a model's `scheme` gives."""
 
 

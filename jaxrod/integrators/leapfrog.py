@@ -50,7 +50,7 @@ class ProjectedLeapfrog(AbstractProjected):
         hk = jnp.where(t > 0, h, 0.5 * h)  # the first step starts from the velocity at t = 0
         if at_position is not None:
             hk = jnp.where(at_position, jnp.where(t > 0, 0.5 * h_save, jnp.zeros_like(hk)), hk)
-        v_trial = model.kick(q, v, a, hk)
+        v_trial = self.kick(model, q, v, a, hk, jnp.where(at_position, h_save, h) if at_position is not None else h)
         v_new = model.friction_update(self.friction, v_trial, v, hk, t, q, a)
         lost, work_in = model.impulse_work(v, v_trial, v_new, a, hk)
         v_run = v_new
@@ -65,6 +65,10 @@ class ProjectedLeapfrog(AbstractProjected):
             return q, v_run, a, (lost, work_in)
         v_at = jax.tree_util.tree_map(lambda new, old: jnp.where(t > 0, new, old), v_new, v)
         return q, v_run, a, (lost, work_in), v_at
+
+    def kick(self, model, q, v, a, hk, h):
+        """The kick of `hk` [s] in a step of `h` [s]: `model.kick` (explicit, f/m)."""
+        return model.kick(q, v, a, hk)
 
     velocity_in_step = True
 

@@ -6,3 +6,4 @@ from .state import Rod3DPosition as Rod3DPosition
 from .state import Rod3DVelocity as Rod3DVelocity
 from .state import sine_velocity as sine_velocity
 from .stiffness import step_limit as step_limit
+from .hessian import IMPLICIT_DT as IMPLICIT_DT

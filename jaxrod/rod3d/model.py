@@ -24,7 +24,7 @@ from ..models.base import AbstractModel
 from ..params import RodChannel
 from ._checks import check_arguments
 from .._numerics import computed_once, float_leaf
-from . import components as c3, energy, measures
+from . import components as c3, energy, hessian, measures
 from .contact import friction_pass, friction_table
 from .state import held_pattern, Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
 from .stiffness import frequency_bound
@@ -257,6 +257,12 @@ class Rod3D(AbstractModel):
         vn = v.v + h * a.f / self.mass[:, None]
         vn, w = self.constrain(vn, w)
         return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
+
+    def implicit_kick(self, q: Rod3DPosition, v: Rod3DVelocity, a: Rod3DForces, hk, h, beta, gamma=0.0) -> Rod3DVelocity:
+        """The kick of `hk` [s] in an implicit step of `h` [s] with Newmark's `beta`:
+        (M + β h² H) Δ = hk (f, τ − ω × Jω) with the block-tridiagonal Hessian H at `q`
+        (`jaxrod.rod3d.hessian.implicit_kick`, [`jaxrod.ImplicitLeapfrog`][])."""
+        return hessian.implicit_kick(self, q, v, a, hk, h, beta, gamma)
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""

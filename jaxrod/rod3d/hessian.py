@@ -1,0 +1,214 @@
+r"""The 3D rod's stiffness: the Hessian of its potential in the coordinates of a step, block
+tridiagonal, and the implicit kick that solves with it.
+
+**Coordinates.** A step moves node k by h vₖ and turns segment k by φₖ = h ωₖ (material frame,
+Q → exp(−[φ]×) Q, `Rod3D.drift`). Ordered as blocks (xₖ, φₖ), k = 0 … n (the last block's φ a
+placeholder with unit mass and no stiffness), the Hessian H of the potential is block
+tridiagonal with 6×6 blocks: the stretch and shear of segment k couple xₖ, φₖ and xₖ₊₁; the
+bend and twist of joint k couple φₖ and φₖ₊₁; the Hertz wall is a 3×3 block per node; gravity,
+body forces and dead loads are linear and add nothing. The segment and joint blocks are
+forward-over-reverse derivatives of each element's energy (the same energies as
+`jaxrod.rod3d.energy`, written per element); the wall's in closed form.
+
+**The implicit kick** (`implicit_kick`) is the kick of Newmark's average-acceleration scheme
+written as a leapfrog: with Δv = v_{n+½} − v_{n−½},
+
+    (M + β h² H(qₙ)) Δv = h F(qₙ),     q_{n+1} = qₙ + h v_{n+½},
+
+which for a linear system is x_{n+1} − 2xₙ + x_{n−1} = −h² M⁻¹K (β x_{n+1} + (1 − 2β) xₙ + β x_{n−1}):
+β = 0 is the explicit leapfrog, β = ¼ the trapezoidal rule, unconditionally stable and
+without numerical dissipation (every mode keeps its amplitude; its frequency is lowered, by
+(ωh)²/12 relative for ωh ≪ 1, and the modes far above 1/h alias to ≈ π/h). The half kicks
+(the first step, the velocity at a save) are half of Δv: (h/2) (M + β h² H)⁻¹ F with the full
+step's matrix. With the numerical damping γ (stiffness-proportional, implicit):
+
+    (M + (β + γ) h² H) Δv = h F(qₙ) − γ h² H v_{n−½},
+
+a damping ratio γhω/2 in a mode of frequency ω: the stiff modes that ωh ≫ 1 aliases are
+damped within a few steps, the slow ones by γhω/2 (`jaxrod.ImplicitLeapfrog`). The gyroscopic
+couple ω × Jω, contact and viscous damping stay explicit. Held
+degrees of freedom are taken out of the system (their rows and columns), and the friction pass
+follows the kick as in the explicit scheme.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from .._banded import block_tridiagonal_matvec, block_tridiagonal_solve
+from . import components as c3
+from .energy import _penetration
+from .so3 import skew
+from .state import Rod3DVelocity, held_pattern
+
+__all__ = ["IMPLICIT_DT", "hessian_blocks", "hessian_blocks_ad", "implicit_kick"]
+
+IMPLICIT_DT = 5e-5
+"""The implicit leapfrog's default step for the 3D rod [s]: set by accuracy, not stability. E3's
+v₀* at 500 segments (μ = 0.3, sine mode 6) moves with the step at first order (the friction pass
+sees each contact's own mass, not the stiffness that couples it within the step): at ΔF = 20 N
+8.114, 8.179, 8.197 mm/s at 1e-4, 5e-5, 3e-5 s against the explicit scheme's 8.23 (−1.5, −0.7,
+−0.5 %); at 5 N 27.12 and 27.16 at 1e-4 and 5e-5 s against 27.13 (docs/rod3d.md). 67× the
+explicit scheme's step at 500 segments, 8× at 60."""
+
+_E3 = jnp.array([0.0, 0.0, 1.0])
+
+
+def _turned(p, Q):
+    """exp(−[p]×) Q to second order in p (all a Hessian at p = 0 reads)."""
+    K = skew(p)
+    return Q - K @ Q + 0.5 * K @ (K @ Q)
+
+
+def _segment_energy(z, Q, kGA, EA, l0):
+    """Stretch and shear energy of one segment [J] as a function of z = (x_a, φ, x_b)."""
+    Qp = _turned(z[3:6], Q)
+    s = Qp @ (z[6:9] - z[0:3]) / l0 - _E3.astype(z.dtype)
+    return 0.5 * l0 * (kGA * (s[0] ** 2 + s[1] ** 2) + EA * s[2] ** 2)
+
+
+def _joint_energy(z, Qa, Qb, EI, GJ, l0):
+    """Bend and twist energy of one joint [J] as a function of z = (φ_a, φ_b)."""
+    R = _turned(z[3:6], Qb) @ _turned(z[0:3], Qa).T
+    psi = c3.log_rotation(c3.unpack_matrix(R))
+    return 0.5 * (EI * (psi[0] ** 2 + psi[1] ** 2) + GJ * psi[2] ** 2) / l0
+
+
+def _wall_blocks(model, x):
+    """The Hertz wall's Hessian per node (n + 1, 3, 3) [N/m]: k l̄ (3/2 √δ e_r e_rᵀ + δ^{3/2}/r
+    (P − e_r e_rᵀ)), P the projector on the channel's cross-section, where δ = r − R > 0."""
+    delta, (_, e1, e2) = _penetration(model, c3.unpack(x))
+    pos = delta > 0
+    pen = jnp.where(pos, delta, 0.0)
+    root = jnp.sqrt(pen)
+    r = model.rod.R + pen
+    kl = model.voronoi * model.contact_stiffness
+    radial = jnp.where(pos, 1.5 * kl * root, 0.0)
+    hoop = jnp.where(pos, kl * pen * root / r, 0.0)
+    e = jnp.stack([jnp.zeros_like(e1), e1, e2], -1)
+    P = jnp.diag(jnp.array([0.0, 1.0, 1.0], x.dtype))
+    ee = e[:, :, None] * e[:, None, :]
+    return radial[:, None, None] * ee + hoop[:, None, None] * (P[None] - ee)
+
+
+def _mm(A, B):
+    """A B for stacks of 3×3 matrices (…, 3, 3), as broadcast products and sums over 3."""
+    return jnp.sum(A[..., :, :, None] * B[..., None, :, :], -2)
+
+
+def _t(A):
+    return jnp.swapaxes(A, -1, -2)
+
+
+def hessian_blocks(model, x, Q):
+    """The stiffness at (x, Q) in the step's coordinates (module docstring): diagonal blocks D
+    (n + 1, 6, 6) and blocks above the diagonal U (n, 6, 6), each ordered (x, y, z, φ₁, φ₂, φ₃)
+    [N/m, N, N·m], in closed form.
+
+    Stretch and shear (exact): with u = Q e the segment vector in the material frame, σ = u/l̂ − e₃,
+    n = Sσ (S = diag(κGA, κGA, EA)): ∂²/∂e² = QᵀSQ/l̂, ∂²/∂e∂φ = Qᵀ(S[u]×/l̂ − [n]×), ∂²/∂φ² =
+    [u]×ᵀS[u]×/l̂ + ½(nuᵀ + unᵀ) − (n·u) I. Bend and twist (Gauss–Newton): ψ = log(Qₖ₊₁Qₖᵀ) moves
+    by A(Rφₖ − φₖ₊₁) with A = J_l(ψ)⁻¹, so the blocks are K = AᵀBA/l̂ (B = diag(EI, EI, GJ)) on
+    φₖ₊₁, RᵀKR on φₖ and −RᵀK between them; the terms of the couple's size that it leaves out
+    are |ψ| (the turn of one joint) relative to these. The Hertz wall: `_wall_blocks`. Checked
+    against forward-over-reverse AD of the potential (`hessian_blocks_ad`)."""
+    rod, n, l0 = model.rod, model.n, model.l0
+    dtype = x.dtype
+    S = jnp.stack([model.shear_coefficient * rod.GA, model.shear_coefficient * rod.GA, rod.EA]).astype(dtype)
+    B = jnp.stack([rod.EI, rod.EI, rod.GJ]).astype(dtype)
+    eye = jnp.eye(3, dtype=dtype)
+    e = x[1:] - x[:-1]
+    u = jnp.sum(Q * e[:, None, :], -1)
+    nv = S[None, :] * (u / l0 - eye[2][None, :])
+    ux = skew(u)
+    Hee = jnp.sum(Q[:, :, :, None] * S[None, :, None, None] * Q[:, :, None, :], 1) / l0
+    Hep = _mm(_t(Q), S[None, :, None] * ux / l0 - skew(nv))
+    Hpp = (jnp.sum(ux[:, :, :, None] * S[None, :, None, None] * ux[:, :, None, :], 1) / l0
+           + 0.5 * (nv[:, :, None] * u[:, None, :] + u[:, :, None] * nv[:, None, :])
+           - jnp.sum(nv * u, -1)[:, None, None] * eye[None])
+    R = _mm(Q[1:], _t(Q[:-1]))
+    psi, c = c3.log_rotation(c3.unpack_matrix(R), with_jacobian=True)
+    px = skew(c3.pack(psi))
+    A = eye[None] - 0.5 * px + c[:, None, None] * _mm(px, px)
+    K = jnp.sum(A[:, :, :, None] * B[None, :, None, None] * A[:, :, None, :], 1) / l0
+    KR = _mm(K, R)
+    D = jnp.zeros((n + 1, 6, 6), dtype)
+    D = D.at[:-1, :3, :3].add(Hee).at[1:, :3, :3].add(Hee)
+    D = D.at[:-1, :3, 3:].add(-Hep).at[:-1, 3:, :3].add(-_t(Hep)).at[:-1, 3:, 3:].add(Hpp)
+    D = D.at[:-2, 3:, 3:].add(_mm(_t(R), KR)).at[1:-1, 3:, 3:].add(K)
+    U = jnp.zeros((n, 6, 6), dtype)
+    U = U.at[:, :3, :3].add(-Hee).at[:, 3:, :3].add(_t(Hep)).at[:-1, 3:, 3:].add(-_t(KR))
+    if model.channel:
+        D = D.at[:, :3, :3].add(_wall_blocks(model, x))
+    return D, U
+
+
+def hessian_blocks_ad(model, x, Q):
+    """The exact Hessian of the potential in the blocks of `hessian_blocks`, by forward-over-
+    reverse AD of each element's energy (the bend and twist terms that the Gauss–Newton blocks
+    leave out included): the reference the tests hold `hessian_blocks` to; 5–20× slower."""
+    rod, n, l0 = model.rod, model.n, model.l0
+    dtype = x.dtype
+    kGA = model.shear_coefficient * rod.GA
+    zero3 = jnp.zeros((n, 3), dtype)
+    zs = jnp.concatenate([x[:-1], zero3, x[1:]], -1)
+    Hs = jax.vmap(jax.hessian(_segment_energy), in_axes=(0, 0, None, None, None))(zs, Q, kGA, rod.EA, l0)
+    zj = jnp.zeros((n - 1, 6), dtype)
+    Hb = jax.vmap(jax.hessian(_joint_energy), in_axes=(0, 0, 0, None, None, None))(zj, Q[:-1], Q[1:], rod.EI, rod.GJ, l0)
+    D = jnp.zeros((n + 1, 6, 6), dtype)
+    D = D.at[:-1, :6, :6].add(Hs[:, :6, :6])
+    D = D.at[1:, :3, :3].add(Hs[:, 6:, 6:])
+    D = D.at[:-2, 3:, 3:].add(Hb[:, :3, :3])
+    D = D.at[1:-1, 3:, 3:].add(Hb[:, 3:, 3:])
+    U = jnp.zeros((n, 6, 6), dtype)
+    U = U.at[:, :6, :3].add(Hs[:, :6, 6:])
+    U = U.at[:-1, 3:, 3:].add(Hb[:, :3, 3:])
+    if model.channel:
+        D = D.at[:, :3, :3].add(_wall_blocks(model, x))
+    return D, U
+
+
+def _block_masses(model, dtype):
+    """The diagonal of the mass matrix per block (n + 1, 6) [kg, kg·m²] (1 for the placeholder)."""
+    m = jnp.broadcast_to(model.mass.astype(dtype)[:, None], (model.n + 1, 3))
+    J = jnp.broadcast_to(model.inertia.astype(dtype)[None, :], (model.n, 3))
+    return jnp.concatenate([m, jnp.concatenate([J, jnp.ones((1, 3), dtype)])], -1)
+
+
+def _free(model, dtype):
+    """1 where a block's unknown is free, 0 where it is held or a placeholder (n + 1, 6)."""
+    held_n, held_s = held_pattern(model)
+    free_s = jnp.concatenate([jnp.asarray(~held_s, dtype), jnp.zeros((1, 3), dtype)])
+    return jnp.concatenate([jnp.asarray(~held_n, dtype), free_s], -1)
+
+
+def _inverse(s):
+    """1/s where s > 0, else 0."""
+    return jnp.where(s > 0, 1.0 / jnp.where(s > 0, s, 1.0), 0.0)
+
+
+def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0) -> Rod3DVelocity:
+    """The kick of `hk` [s] of the implicit leapfrog of step `h` [s] (module docstring):
+    Δ = (M + (β + γ) h² H(q))⁻¹ (hk (f, τ − ω × Jω) − γ h hk H v) on the free degrees of freedom, in units scaled by
+    M^{−½} (the system then reads I + (β + γ) h² M^{−½} H M^{−½}). Held degrees of freedom keep their
+    prescribed values. A matrix that is not positive definite (a step far past what the
+    compressed rod allows) gives a non-finite state, which the run reports."""
+    dtype = v.v.dtype
+    D, U = hessian_blocks(model, q.x, q.Q)
+    free = _free(model, dtype)
+    s = free / jnp.sqrt(_block_masses(model, dtype))  # M^{-1/2} on the free unknowns, 0 elsewhere
+    Ds = s[:, :, None] * D * s[:, None, :]
+    Us = s[:-1, :, None] * U * s[1:, None, :]
+    c = (beta + gamma) * h * h
+    J = c3.unpack(model.inertia)
+    W = c3.unpack(v.w)
+    gyro = c3.pack(c3.cross(W, (J[0] * W[0], J[1] * W[1], J[2] * W[2])))
+    torque = jnp.concatenate([a.tau - gyro, jnp.zeros((1, 3), dtype)])
+    rhs = hk * s * jnp.concatenate([a.f, torque], -1)
+    if gamma:  # stiffness-proportional damping γ h H v, implicit
+        vel = jnp.concatenate([v.v, jnp.concatenate([v.w, jnp.zeros((1, 3), dtype)])], -1) * _inverse(s)
+        rhs = rhs - gamma * h * hk * block_tridiagonal_matvec(Ds, Us, vel)
+    step = s * block_tridiagonal_solve(c * Ds + jnp.eye(6, dtype=dtype)[None], c * Us, rhs)
+    vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
+    return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)

@@ -1,0 +1,183 @@
+"""The 3D rod's implicit leapfrog (`jaxrod.ImplicitLeapfrog`, `jaxrod.rod3d.hessian`) against
+independent references: the dense solve for the block-tridiagonal one, AD of the potential for
+the closed-form stiffness, the explicit leapfrog for the scheme (β = γ = 0 is that scheme), the
+trapezoidal rule's energy conservation, exact stick, and the explicit scheme's committed v₀*
+(docs/rod3d.md) for the answers."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod import theory
+from jaxrod._banded import block_tridiagonal_matvec, block_tridiagonal_solve
+from jaxrod.rod3d import Rod3D, sine_velocity, step_limit
+from jaxrod.rod3d.hessian import _turned, hessian_blocks, hessian_blocks_ad
+from jaxrod.rod3d.so3 import skew
+
+
+def _dense(D, U):
+    nb, m = D.shape[0], D.shape[-1]
+    A = np.zeros((nb * m, nb * m))
+    for k in range(nb):
+        A[m * k:m * k + m, m * k:m * k + m] = D[k]
+        if k < nb - 1:
+            A[m * k:m * k + m, m * k + m:m * k + 2 * m] = U[k]
+            A[m * k + m:m * k + 2 * m, m * k:m * k + m] = np.asarray(U[k]).T
+    return A
+
+
+def test_block_tridiagonal_solve_matches_a_dense_solve_and_flags_an_indefinite_matrix():
+    rng = np.random.default_rng(0)
+    nb, m = 9, 6
+    U = rng.normal(size=(nb - 1, m, m))
+    G = rng.normal(size=(nb, m, m))
+    D = 12.0 * np.eye(m) + np.einsum("kij,klj->kil", G, G)
+    b = rng.normal(size=(nb, m))
+    A = _dense(D, U)
+    assert np.linalg.eigvalsh(A).min() > 0
+    x = block_tridiagonal_solve(jnp.asarray(D), jnp.asarray(U), jnp.asarray(b))
+    np.testing.assert_allclose(np.asarray(x).ravel(), np.linalg.solve(A, b.ravel()), rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(block_tridiagonal_matvec(jnp.asarray(D), jnp.asarray(U), x), b, rtol=1e-10, atol=1e-11)
+    bad = D.copy()
+    bad[4] = -bad[4]  # not positive definite: NaN, never a silent answer
+    assert not np.isfinite(np.asarray(block_tridiagonal_solve(jnp.asarray(bad), jnp.asarray(U), jnp.asarray(b)))).all()
+
+
+def _bent_state(n=6, turn=0.05, seed=1):
+    model = Rod3D(jr.RodChannel.reference(mu=0.3), n, control="force", preload=3.0)
+    q, _ = model.initial_state(3.0, lateral_offset=2e-3 * jnp.sin(jnp.linspace(0, 3, n + 1)))
+    rng = np.random.default_rng(seed)
+    x = q.x + 1e-4 * rng.normal(size=q.x.shape)  # some nodes in the wall, some off it
+    phi = jnp.asarray(turn * rng.normal(size=(n, 3)))
+    Q = jax.vmap(lambda p, Q: jax.scipy.linalg.expm(-skew(p)) @ Q)(phi, q.Q)
+    return model, x, Q
+
+
+def _ad_dense(model, x, Q):
+    """The Hessian of `model.potential` in (x, φ) by AD of the whole potential, in block order."""
+    n = model.n
+
+    def U(z):
+        xx = z[:3 * (n + 1)].reshape(n + 1, 3)
+        p = z[3 * (n + 1):].reshape(n, 3)
+        return model.potential(xx, jax.vmap(_turned)(p, Q))
+
+    H = np.asarray(jax.hessian(U)(jnp.concatenate([x.ravel(), jnp.zeros(3 * n)])))
+    perm = []
+    for k in range(n + 1):
+        perm += [3 * k, 3 * k + 1, 3 * k + 2] + ([3 * (n + 1) + 3 * k + i for i in range(3)] if k < n else [-1] * 3)
+    out = np.zeros((6 * (n + 1),) * 2)
+    for i, pi in enumerate(perm):
+        for j, pj in enumerate(perm):
+            if pi >= 0 and pj >= 0:
+                out[i, j] = H[pi, pj]
+    return out
+
+
+def test_the_element_hessians_are_the_potentials():
+    """The per-element AD blocks assembled are the Hessian of the whole potential (stretch, shear,
+    bend, twist, the Hertz wall with nodes in and out of it), to rounding."""
+    model, x, Q = _bent_state()
+    ref = _ad_dense(model, x, Q)
+    got = _dense(*hessian_blocks_ad(model, x, Q))
+    assert np.abs(got - ref).max() < 1e-12 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("turn", [0.0, 0.05])
+def test_the_closed_form_stiffness_against_ad(turn):
+    """Stretch, shear and the wall exact; bend and twist Gauss–Newton: their blocks differ from
+    the exact ones by about |ψ| (the turn of a joint) relative to the bending stiffness EI/l̂."""
+    model, x, Q = _bent_state(turn=turn)
+    D, U = hessian_blocks(model, x, Q)
+    Da, Ua = hessian_blocks_ad(model, x, Q)
+    scale = float(jnp.abs(Da).max())
+    np.testing.assert_allclose(D[:, :3, :], Da[:, :3, :], rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(U[:, :, :3], Ua[:, :, :3], rtol=0, atol=1e-12 * scale)
+    bend = float(model.rod.EI / model.l0)
+    tol = 4 * float(jnp.abs(model.strains(x, Q)[1]).max() * model.l0)  # 4 |ψ|: the largest turn of a joint
+    assert float(jnp.abs(U[:, 3:, 3:] - Ua[:, 3:, 3:]).max()) < tol * bend
+    assert float(jnp.abs(D[:, 3:, 3:] - Da[:, 3:, 3:]).max()) < tol * bend + 1e-12 * scale
+
+
+def _loaded(n=12, mu=0.3, dF=5.0, v0=0.02):
+    rod = jr.RodChannel.reference(mu) if mu > 0 else jr.RodChannel.reference(0.3).with_friction(0.0, 0.0)
+    model = Rod3D(rod, n, control="load", end_load=theory.reference_load(rod) + dF)
+    q0, v0 = model.initial_state(None, lateral_velocity=sine_velocity(model, v0))
+    return model, q0, v0
+
+
+def _run(model, integrator, q0, v0, t1, n_save=5, **opts):
+    opts = jr.RunOptions(**{"stop_on_buckle": False, "stop_when_stuck": False, **opts})
+    return jax.jit(lambda q, v: jr.simulate(model, integrator, q, v, t1, n_save=n_save, options=opts, throw=False))(q0, v0)
+
+
+def test_with_beta_and_gamma_zero_it_is_the_explicit_leapfrog():
+    model, q0, v0 = _loaded()
+    dt = 0.5 * step_limit(model)
+    a = _run(model, jr.ProjectedLeapfrog(dt), q0, v0, 200 * dt)
+    b = _run(model, jr.ImplicitLeapfrog(dt, beta=0.0, gamma=0.0), q0, v0, 200 * dt)
+    np.testing.assert_allclose(b.q.x, a.q.x, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(b.v.v, a.v.v, rtol=0, atol=1e-10)
+
+
+def test_a_free_rod_stays_bounded_far_past_the_explicit_limit_and_gamma_damps_it():
+    """A free rod in space (no wall, gravity or friction) in the linear regime (lateral velocity
+    1 µm/s): at 30× the explicit limit the trapezoidal rule (γ = 0) stays bounded — the largest
+    node speed of the last quarter of the run no larger than of the first, where the explicit
+    leapfrog blows up at 1.05× — and the default γ = 0.1 lowers it. (Its energy at the saved
+    positions is not a conserved quantity at such a step: the nodes drift h·v before the shear
+    springs turn the segments, so the aliased shear mode holds (ω_s h)²/9 times the kinetic
+    energy put in: 11× at 3× the limit, 1.1e3× at 10×, measured; docs/rod3d.md.)"""
+    rod = jr.RodChannel.reference(0.3).with_friction(0.0, 0.0)
+    model = Rod3D(rod, 12, channel=False, control="force", gravity=False)
+    q0, v0 = model.initial_state(0.0, lateral_velocity=sine_velocity(model, 1e-6))
+    h = 30 * step_limit(model)
+    speeds = {}
+    for gamma in (0.0, 0.1):
+        sol = _run(model, jr.ImplicitLeapfrog(h, gamma=gamma), q0, v0, 400 * h, n_save=41)
+        assert int(sol.result) == 0
+        speed = jnp.max(jnp.abs(sol.v.v), axis=(1, 2))
+        speeds[gamma] = float(jnp.max(speed[30:]))
+        assert speeds[gamma] <= 1.0 * float(jnp.max(speed[:10]))
+    assert speeds[0.1] < speeds[0.0]
+
+
+def test_a_held_rod_does_not_creep_at_a_large_step():
+    """A compressed rod resting on the bottom with μ = 0.3, pushed along its axis by 0.4 μ w per
+    length (inside the friction cone): at 20× the explicit limit it does not slide."""
+    rod = jr.RodChannel.reference(0.3)
+    model = Rod3D(rod, 24, control="force", preload=2.0, friction_at="axis",
+                  body_force=(0.4 * 0.3 * float(rod.w), 0.0, 0.0))
+    q0, v0 = model.initial_state(2.0)
+    h = 20 * step_limit(model)
+    sol = _run(model, jr.ImplicitLeapfrog(h), q0, v0, 500 * h)
+    assert int(sol.result) == 0
+    assert float(jnp.max(jnp.abs(sol.q.x[-1, :, 0] - q0.x[:, 0]))) < 1e-9
+
+
+def test_the_critical_velocity_at_60_segments_matches_the_explicit_scheme():
+    """E3's run (dead load F⁰₆ + 5 N, μ = 0.3, sine mode 6, 0.4 s) at the implicit scheme's default
+    step (`jaxrod.rod3d.IMPLICIT_DT`, 8× the explicit step here): stable 1 % below the explicit
+    scheme's v₀* (26.19 mm/s, bracket 26.13–26.26, results/paper/e3/rod3d_boundary_n60_leapfrog.csv),
+    buckled 1 % above."""
+    from jaxrod.experiments.e3_rod3d import label_3d
+    from jaxrod.rod3d import IMPLICIT_DT
+
+    label = label_3d(jr.RodChannel.reference(0.3), 60, IMPLICIT_DT, 0.4, scheme="implicit")
+    assert float(label(5.0, 0.99 * 26.19e-3)) == 0.0
+    assert float(label(5.0, 1.01 * 26.19e-3)) == 1.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("dF, v_star", [(5.0, 27.13e-3), (20.0, 8.23e-3)])
+def test_the_critical_velocity_at_500_segments_matches_the_explicit_scheme(dF, v_star):
+    """The [implicit3d] gate at the paper's 500 segments: within 1 % of the explicit scheme's v₀*
+    (27.13 and 8.23 mm/s at ΔF = 5 and 20 N, results/paper/e3/rod3d_boundary_n500.csv)."""
+    from jaxrod.experiments.e3_rod3d import label_3d
+    from jaxrod.rod3d import IMPLICIT_DT
+
+    label = label_3d(jr.RodChannel.reference(0.3), 500, IMPLICIT_DT, 0.4, scheme="implicit")
+    assert float(label(dF, 0.99 * v_star)) == 0.0
+    assert float(label(dF, 1.01 * v_star)) == 1.0
