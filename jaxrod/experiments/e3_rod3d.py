@@ -150,7 +150,7 @@ def _bisect(label, guess, width, rtol, max_runs):
 
 
 def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=16, runs_csv=None,
-                friction_at="surface", ends="pinned", sink=SINK, scheme="leapfrog", progress=True):
+                friction_at="surface", ends="pinned", sink=SINK, scheme="leapfrog", dt=None, progress=True):
     """v₀*(ΔF) [m/s] of the 3D rod of `n` segments at each load `dFs` [N] above F⁰₆ (label
     bisection to `rtol` relative bracket width), next to the field model's converged boundary
     search, and the power laws v₀* ∝ ΔF^p fitted to each.
@@ -158,8 +158,9 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     **Arguments:** `t1` the horizon [s] (a run that neither sticks nor buckles by then is
     stable), `width` the half-width of the first bracket (relative), `max_runs` per load,
     `runs_csv` the file every finished run is appended to and replayed from, `friction_at` and
-    `ends` passed to [`jaxrod.rod3d.Rod3D`][], `sink` the wall's compliance and `scheme` the
-    integrator (see `label_3d`).
+    `ends` passed to [`jaxrod.rod3d.Rod3D`][], `sink` the wall's compliance, `scheme` the
+    integrator (see `label_3d`) and `dt` its step [s] (default: the scene's, half the explicit
+    limit; the implicit scheme's own default is `jaxrod.rod3d.IMPLICIT_DT`).
 
     **Returns:** dict with `points` (per load: `dF`, `field`, `rod3d`, `bracket`, `runs`,
     `seconds`), `exponent_rod3d` ± `exponent_rod3d_stderr`, `exponent_field` ± its stderr (the
@@ -170,7 +171,8 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     rod = RodChannel.reference(mu)
     dFs = np.sort(np.asarray(dFs, float))
     # one step for every load (the step limit barely moves with the load): one compiled run
-    dt = min(Scene(rod, float(dF), SineVelocity(1e-3), kind="rod3d", n=n).step() for dF in dFs)
+    if dt is None:
+        dt = min(Scene(rod, float(dF), SineVelocity(1e-3), kind="rod3d", n=n).step() for dF in dFs)
 
     buckled = label_3d(rod, n, dt, t1, friction_at, ends, sink, scheme)
     done = _runs_of(runs_csv, n, mu, t1, dt, friction_at, ends, sink, scheme)
