@@ -92,13 +92,65 @@ def _wall_blocks(model, x):
     return radial[:, None, None] * ee + hoop[:, None, None] * (P[None] - ee)
 
 
-def _mm(A, B):
-    """A B for stacks of 3×3 matrices (…, 3, 3), as broadcast products and sums over 3."""
-    return jnp.sum(A[..., :, :, None] * B[..., None, :, :], -2)
+def _sym_products(P, W, Q):
+    """Σₖ Wₖ P[k][a] Q[k][b] for matrices as rows of components: entry (a, b) as a tuple."""
+    return tuple(tuple(sum(W[k] * P[k][a] * Q[k][b] for k in range(3)) for b in range(3)) for a in range(3))
 
 
-def _t(A):
-    return jnp.swapaxes(A, -1, -2)
+def _skew(u):
+    z = jnp.zeros_like(u[0])
+    return ((z, -u[2], u[1]), (u[2], z, -u[0]), (-u[1], u[0], z))
+
+
+def _pad(a, front: int, back: int):
+    """A component array padded with zeros along its first axis."""
+    return jnp.pad(a, (front, back))
+
+
+def element_blocks(model, x, Q):
+    """The stiffness's pieces per segment and joint, as tuples of component arrays (`hessian_blocks`
+    assembles them): Hee (n) [N/m], Hep (n) [N], Hpp (n) [N·m], and for the joints (n − 1) RᵀKR,
+    K and KR [N·m]."""
+    rod, l0 = model.rod, model.l0
+    X = c3.unpack(x)
+    Qr = c3.unpack_matrix(Q)
+    kGA = model.shear_coefficient * rod.GA
+    S = (kGA, kGA, rod.EA)
+    B = (rod.EI, rod.EI, rod.GJ)
+    e = tuple(X[k][1:] - X[k][:-1] for k in range(3))
+    u = c3.matvec(Qr, e)
+    nv = (S[0] * u[0] / l0, S[1] * u[1] / l0, S[2] * (u[2] / l0 - 1.0))
+    Hee = _sym_products(Qr, tuple(Sk / l0 for Sk in S), Qr)
+    ux, nx = _skew(u), _skew(nv)
+    M = tuple(tuple(S[a] * ux[a][b] / l0 - nx[a][b] for b in range(3)) for a in range(3))
+    Hep = tuple(tuple(sum(Qr[a][c] * M[a][b] for a in range(3)) for b in range(3)) for c in range(3))
+    nu = c3.dot(nv, u)
+    Hpp = tuple(tuple(sum(S[k] * ux[k][a] * ux[k][b] for k in range(3)) / l0 + 0.5 * (nv[a] * u[b] + u[a] * nv[b])
+                      - (nu if a == b else 0.0) for b in range(3)) for a in range(3))
+    upper = tuple(tuple(q[1:] for q in row) for row in Qr)
+    lower = tuple(tuple(q[:-1] for q in row) for row in Qr)
+    R = c3.relative_rotation(upper, lower)
+    psi, cj = c3.log_rotation(R, with_jacobian=True)
+    pp = c3.dot(psi, psi)
+    px = _skew(psi)
+    A = tuple(tuple((1.0 if a == b else 0.0) - 0.5 * px[a][b] + cj * (psi[a] * psi[b] - (pp if a == b else 0.0))
+                    for b in range(3)) for a in range(3))
+    K = _sym_products(A, tuple(Bk / l0 for Bk in B), A)
+    KR = tuple(tuple(sum(K[a][k] * R[k][b] for k in range(3)) for b in range(3)) for a in range(3))
+    RKR = tuple(tuple(sum(R[k][a] * KR[k][b] for k in range(3)) for b in range(3)) for a in range(3))
+    return Hee, Hep, Hpp, RKR, K, KR
+
+
+def _wall_components(model, x):
+    """The Hertz wall's Hessian per node as components (yy, yz, zz) (`_wall_blocks`)."""
+    delta, (_, e1, e2) = _penetration(model, c3.unpack(x))
+    pos = delta > 0
+    pen = jnp.where(pos, delta, 0.0)
+    root = jnp.sqrt(pen)
+    kl = model.voronoi * model.contact_stiffness
+    radial = jnp.where(pos, 1.5 * kl * root, 0.0)
+    hoop = jnp.where(pos, kl * pen * root / (model.rod.R + pen), 0.0)
+    return radial * e1 * e1 + hoop * (1.0 - e1 * e1), (radial - hoop) * e1 * e2, radial * e2 * e2 + hoop * (1.0 - e2 * e2)
 
 
 def hessian_blocks(model, x, Q):
@@ -112,35 +164,32 @@ def hessian_blocks(model, x, Q):
     by A(Rφₖ − φₖ₊₁) with A = J_l(ψ)⁻¹, so the blocks are K = AᵀBA/l̂ (B = diag(EI, EI, GJ)) on
     φₖ₊₁, RᵀKR on φₖ and −RᵀK between them; the terms of the couple's size that it leaves out
     are |ψ| (the turn of one joint) relative to these. The Hertz wall: `_wall_blocks`. Checked
-    against forward-over-reverse AD of the potential (`hessian_blocks_ad`)."""
-    rod, n, l0 = model.rod, model.n, model.l0
-    dtype = x.dtype
-    S = jnp.stack([model.shear_coefficient * rod.GA, model.shear_coefficient * rod.GA, rod.EA]).astype(dtype)
-    B = jnp.stack([rod.EI, rod.EI, rod.GJ]).astype(dtype)
-    eye = jnp.eye(3, dtype=dtype)
-    e = x[1:] - x[:-1]
-    u = jnp.sum(Q * e[:, None, :], -1)
-    nv = S[None, :] * (u / l0 - eye[2][None, :])
-    ux = skew(u)
-    Hee = jnp.sum(Q[:, :, :, None] * S[None, :, None, None] * Q[:, :, None, :], 1) / l0
-    Hep = _mm(_t(Q), S[None, :, None] * ux / l0 - skew(nv))
-    Hpp = (jnp.sum(ux[:, :, :, None] * S[None, :, None, None] * ux[:, :, None, :], 1) / l0
-           + 0.5 * (nv[:, :, None] * u[:, None, :] + u[:, :, None] * nv[:, None, :])
-           - jnp.sum(nv * u, -1)[:, None, None] * eye[None])
-    R = _mm(Q[1:], _t(Q[:-1]))
-    psi, c = c3.log_rotation(c3.unpack_matrix(R), with_jacobian=True)
-    px = skew(c3.pack(psi))
-    A = eye[None] - 0.5 * px + c[:, None, None] * _mm(px, px)
-    K = jnp.sum(A[:, :, :, None] * B[None, :, None, None] * A[:, :, None, :], 1) / l0
-    KR = _mm(K, R)
-    D = jnp.zeros((n + 1, 6, 6), dtype)
-    D = D.at[:-1, :3, :3].add(Hee).at[1:, :3, :3].add(Hee)
-    D = D.at[:-1, :3, 3:].add(-Hep).at[:-1, 3:, :3].add(-_t(Hep)).at[:-1, 3:, 3:].add(Hpp)
-    D = D.at[:-2, 3:, 3:].add(_mm(_t(R), KR)).at[1:-1, 3:, 3:].add(K)
-    U = jnp.zeros((n, 6, 6), dtype)
-    U = U.at[:, :3, :3].add(-Hee).at[:, 3:, :3].add(_t(Hep)).at[:-1, 3:, 3:].add(-_t(KR))
-    if model.channel:
-        D = D.at[:, :3, :3].add(_wall_blocks(model, x))
+    against forward-over-reverse AD of the potential (`hessian_blocks_ad`). Computed on
+    component arrays (one per entry, as the forces are: `jaxrod.rod3d.components`) and stacked
+    once."""
+    D, U = _assembled(model, x, Q)
+    return (jnp.stack([jnp.stack(row, -1) for row in D], -2), jnp.stack([jnp.stack(row, -1) for row in U], -2))
+
+
+def _assembled(model, x, Q):
+    """The entries of D (n + 1 blocks) and U (n blocks) as 6×6 tuples of component arrays."""
+    Hee, Hep, Hpp, RKR, K, KR = element_blocks(model, x, Q)
+    zn1 = jnp.zeros_like(x[:, 0])
+    wall = _wall_components(model, x) if model.channel else (zn1, zn1, zn1)
+    W = ((zn1, zn1, zn1), (zn1, wall[0], wall[1]), (zn1, wall[1], wall[2]))
+    D = [[None] * 6 for _ in range(6)]
+    U = [[None] * 6 for _ in range(6)]
+    zn = jnp.zeros_like(Hee[0][0])
+    for a in range(3):
+        for b in range(3):
+            D[a][b] = _pad(Hee[a][b], 1, 0) + _pad(Hee[a][b], 0, 1) + W[a][b]
+            D[a][3 + b] = _pad(-Hep[a][b], 0, 1)
+            D[3 + b][a] = D[a][3 + b]
+            D[3 + a][3 + b] = _pad(Hpp[a][b], 0, 1) + _pad(RKR[a][b], 0, 2) + _pad(K[a][b], 1, 1)
+            U[a][b] = -Hee[a][b]
+            U[a][3 + b] = zn
+            U[3 + b][a] = Hep[a][b]
+            U[3 + a][3 + b] = _pad(-KR[b][a], 0, 1)
     return D, U
 
 
