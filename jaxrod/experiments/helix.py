@@ -54,12 +54,14 @@ def helix_theory(rod: RodChannel) -> dict:
 
 
 def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset: float = 0.5e-3,
-              sps: float = 20.0, progress: bool = True) -> dict:
+              sps: float = 20.0, progress: bool = True, scheme: str | None = None, dt: float | None = None) -> dict:
     """Run the rod through displacement-controlled `stages`, each `(speed [m/s], duration [s])`
     (speed > 0 pushes, < 0 pulls back, 0 holds), each stage starting from the previous one's
     final state. The rod starts straight on the channel bottom, unloaded, with a mode-6 lateral
     imperfection of `offset` [m] along the wall; mass-proportional viscous `damping` [1/s]
-    removes the kinetic energy of snaps so that the path is close to quasi-static.
+    removes the kinetic energy of snaps so that the path is close to quasi-static. `scheme` and `dt`
+    [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`; default the rod's) and its step
+    (default half the explicit limit at each stage's start).
 
     **Returns:** dict of NumPy arrays over all saves: `ts`, `d` (end displacement [m]),
     `reaction` (at the pushed end [N]), `x` (node positions), `normal_force`, `axial_force`,
@@ -77,8 +79,8 @@ def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset:
         n_save = max(2, int(round(duration * sps)) + 1)
         if progress:
             print(f"  stage {k}: speed {speed * 1e3:+g} mm/s for {duration:g} s ({n} segments)", flush=True)
-        dt = 0.5 * step_limit(model, state[0])
-        sol = run(model, *state, duration, n_save, dt, stop_on_buckle=False, save_state=True)
+        h = 0.5 * step_limit(model, state[0]) if dt is None else dt
+        sol = run(model, *state, duration, n_save, h, stop_on_buckle=False, save_state=True, scheme=scheme)
         if int(sol.result) != 0:
             raise FloatingPointError(f"stage {k} of the load path became non-finite (result {int(sol.result)}).")
         first = 0 if k == 0 else 1
@@ -92,7 +94,7 @@ def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset:
             stage=np.full(n_save - first, k),
         ))
         d0, D0, W0 = float(parts[-1]["d"][-1]), float(parts[-1]["dissipated"][-1]), float(parts[-1]["work_in"][-1])
-        dts.append(save_grid(duration, n_save, dt)[1])
+        dts.append(save_grid(duration, n_save, h)[1])
         state, t0 = (sol.q_final, sol.v_final), t0 + duration
     out = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
     out["dt"] = np.asarray(dts)

@@ -32,13 +32,14 @@ SIZES = {
 
 
 def run(model, q0, v0, t1, n_save, dt, *, threshold=0.5, stop_on_buckle=True, stop_when_stuck=True,
-        save_state=False, progress=False):
+        save_state=False, progress=False, scheme=None):
     """One [`jaxrod.simulate`][] run of the 3D rod with its default scheme (projected leapfrog,
-    `jaxrod.integrators.default_for`) and the options of
-    [`jaxrod.RunOptions`][] (same names and defaults; vmap it for a batch, without `progress`)."""
+    `jaxrod.integrators.default_for`) or `scheme` (a key of `jaxrod.integrators.SCHEMES`) and the
+    options of [`jaxrod.RunOptions`][] (same names and defaults; vmap it for a batch, without
+    `progress`)."""
     opts = RunOptions(buckle_threshold=threshold, stop_on_buckle=stop_on_buckle,
                       stop_when_stuck=stop_when_stuck, save_state=save_state, progress=progress)
-    return simulate(model, default_for(model, float(dt)), q0, v0, t1, n_save=n_save, options=opts, throw=False)
+    return simulate(model, default_for(model, float(dt), scheme), q0, v0, t1, n_save=n_save, options=opts, throw=False)
 
 
 def _batched(model, states, t1, n_save, dt, threshold, stop_on_buckle=True, stop_when_stuck=True):

@@ -26,8 +26,12 @@ SCHEMES = {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet, "implicit":
 """The projected schemes by the name a model's `scheme` gives."""
 
 
-def default_for(model, dt: float, **kwargs) -> AbstractFixedStep:
+def default_for(model, dt: float, scheme: str | None = None, **kwargs) -> AbstractFixedStep:
     """The fixed-step integrator a run of `model` uses by default, step `dt` [s] (`kwargs`, e.g.
     `friction`, go to it): `SCHEMES[model.scheme]`, [`jaxrod.ProjectedLeapfrog`][] for the 3D rod,
-    [`jaxrod.ProjectedVerlet`][] for the reduced models."""
-    return SCHEMES[model.scheme](dt, **kwargs)
+    [`jaxrod.ProjectedVerlet`][] for the reduced models; `scheme`, a key of `SCHEMES`, chooses
+    another."""
+    name = model.scheme if scheme is None else scheme
+    if name not in SCHEMES:
+        raise ValueError(f"scheme = {name!r} is invalid: expected one of {tuple(SCHEMES)}.")
+    return SCHEMES[name](dt, **kwargs)

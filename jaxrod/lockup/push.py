@@ -119,16 +119,17 @@ def extents(theta, s, wave):
     return helical.sum(-1) * ds, sinusoidal.sum(-1) * ds
 
 
-def _start(rod, n, imperfection, key, dt_fraction, rod3d):
-    """The scene's rod, its straight imperfect start and the step."""
+def _start(rod, n, imperfection, key, dt_fraction, rod3d, dt=None):
+    """The scene's rod, its straight imperfect start and the step (`dt` [s], default `dt_fraction`
+    × the explicit limit)."""
     model = push_model(rod, n, **rod3d)
     key = jax.random.key(0) if key is None else key
     offset = _imperfection(model, imperfection * float(rod.R), key)
     q, v = model.initial_state(0.0, lateral_offset=jnp.asarray(offset))
-    return model.n, q, v, dt_fraction * float(step_limit(model, q))
+    return model.n, q, v, dt_fraction * float(step_limit(model, q)) if dt is None else float(dt)
 
 
-def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None):
+def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme=None):
     """Run `phases` — (model, duration [s]) in turn, each from where the last left the rod — and
     record what the scene reports (each phase's first save dropped after the first). With
     `lanes`, each model is a batch (its leaves with a leading lane axis, `inject_lanes`), and so
@@ -146,11 +147,11 @@ def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None):
             model = adjust(last, obs, t0)
         last = model
         if lanes:
-            sol = _run_lanes(model, q, v, dt, duration, n_save, opts)
+            sol = _run_lanes(model, q, v, dt, duration, n_save, opts, scheme)
             if progress:
                 print(f"  {t0 + duration:.4g} s of {sum(d for _, d in phases):.4g} s run", flush=True)
         else:
-            sol = simulate(model, default_for(model, dt), q, v, duration, n_save=n_save, options=opts, throw=False)
+            sol = simulate(model, default_for(model, dt, scheme), q, v, duration, n_save=n_save, options=opts, throw=False)
         q, v = sol.q_final, sol.v_final
         ts = np.asarray(sol.ts)[0] if lanes else np.asarray(sol.ts)
         obs = {name: np.asarray(a) for name, a in sol.observables.items()}
@@ -171,10 +172,10 @@ def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None):
 
 
 @eqx.filter_jit
-def _run_lanes(models, q, v, dt, duration, n_save, opts):
+def _run_lanes(models, q, v, dt, duration, n_save, opts, scheme=None):
     """One compiled, vmapped run of a batch of models, each lane from its own (q, v)."""
     def one(model, q, v):
-        return simulate(model, default_for(model, dt), q, v, duration, n_save=n_save, options=opts, throw=False)
+        return simulate(model, default_for(model, dt, scheme), q, v, duration, n_save=n_save, options=opts, throw=False)
 
     return eqx.filter_vmap(one, in_axes=(eqx.if_array(0), 0, 0))(models, q, v)
 
@@ -218,19 +219,21 @@ def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: 
 
 def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unload: bool = False,
            n: int | None = None, n_save: int = 101, imperfection: float = 1e-3, key=None,
-           dt_fraction: float = 0.3, progress: bool = False, **rod3d) -> dict:
+           dt_fraction: float = 0.3, progress: bool = False, scheme: str | None = None, dt: float | None = None,
+           **rod3d) -> dict:
     """Inject the rod: the entry (node n) is pushed into the channel at `speed` [m/s] for
     `duration` [s] (then, with `unload`, pulled back as far), while the far end (node 0) slides
     against the dead load `F_far` [N] (`Rod3D.far_load`: a bit pressed on the rock, a catheter tip
     against a vessel). The rod slides toward the far end all along, as the soft-string law
-    assumes. **Returns:** as `push`, with `F_in` the entry's axial support force [N] and `F_far`
+    assumes. `scheme` and `dt` [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`, default
+    the rod's) and its step (default `dt_fraction` × the explicit limit). **Returns:** as `push`, with `F_in` the entry's axial support force [N] and `F_far`
     the far load; `u[:, 0]` is how far the far end has moved."""
     speed = _check("speed", speed, 0.0, False, " m/s")
     F_far = _check("F_far", F_far, 0.0, True, " N")
-    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d)
+    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d, dt)
     model = lambda sp: Rod3D(rod, n, control="displacement", speed=sp, far_load=F_far, ends="pinned", **rod3d)
     phases = [(model(speed), duration)] + ([(model(-speed), duration)] if unload else [])
-    rec = _phases(rod, phases, q, v, dt, n_save, progress)
+    rec = _phases(rod, phases, q, v, dt, n_save, progress, scheme=scheme)
     return _forces(rec, rec["reaction"][:, 1], np.full(len(rec["t"]), F_far))
 
 

@@ -1,0 +1,86 @@
+"""The implicit leapfrog on the 3D rod's other committed answers (issue [implicit3d]'s gates),
+each beside the explicit scheme's committed value, with the wall time of both:
+
+- `helix`: the frictionless rod of the post-buckling experiment (60 segments, pushed at 1 mm/s,
+  viscous damping 50 1/s, a 0.5 mm mode-6 imperfection) goes over the top of the channel at an
+  end load of 2.02–2.04 N with the explicit scheme (the reaction at the save before and at the
+  first save with a node over the top, `jaxrod.experiments.helix`; docs/paper.md);
+- `lockup`: the lock-up scene's injection at μL/ℓ = 1, r/ℓ = 0.02, μ = 0.5, far load 2.5 F₀,
+  0.3 m at 5 mm/s, damping 20/s, 37 segments: the entry force over the last fifth of the push,
+  4.307–4.352 F₀ with the explicit scheme (results/lockup/muL1_far2.5/lockup.json).
+
+Rows (one per case and step) go to `benchmarks/results/rod3d_implicit_gates.csv`.
+
+    python benchmarks/rod3d_implicit_gates.py                 # both (~6 min)
+    python benchmarks/rod3d_implicit_gates.py --only helix --dt 5e-5 1e-4
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import subprocess
+import time
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+import numpy as np  # noqa: E402
+
+from jaxrod.experiments.helix import helix_measures, load_path  # noqa: E402
+from jaxrod.lockup.push import inject, push_rod, units  # noqa: E402
+from jaxrod.params import RodChannel  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(HERE, "results", "rod3d_implicit_gates.csv")
+
+
+def helix(dt):
+    rod = RodChannel.reference(0.0)
+    t0 = time.perf_counter()
+    p = load_path(rod, 60, [(1e-3, 7e-3 / 1e-3)], sps=20, progress=False, scheme="implicit", dt=dt)
+    sec = time.perf_counter() - t0
+    h = helix_measures(rod, p["x"], p["normal_force"], p["axial_force"])
+    over = np.flatnonzero(h["over_top"])
+    i = int(over[0]) if over.size else None
+    value = [float(p["reaction"][i - 1]), float(p["reaction"][i])] if i else [float("nan")] * 2
+    return dict(case="helix over the top, mu 0, 60 segments [N]", dt=dt, explicit_lo=2.02, explicit_hi=2.04,
+                implicit_lo=round(value[0], 4), implicit_hi=round(value[1], 4), seconds=round(sec, 1))
+
+
+def lockup(dt):
+    rod = push_rod(1.0, 0.02, 0.5)
+    F0, _ = units(rod)
+    t0 = time.perf_counter()
+    r = inject(rod, 2.5 * F0, 0.005, 0.3 / 0.005, n_save=201, damping=20.0, scheme="implicit", dt=dt)
+    sec = time.perf_counter() - t0
+    loading = r["phase"] == 0
+    tail = loading & (r["push"] >= 0.8 * float(np.max(r["push"][loading])))
+    return dict(case="lock-up entry force, muL/ell 1, far 2.5 F0, 37 segments [F0]", dt=dt, explicit_lo=4.307,
+                explicit_hi=4.352, implicit_lo=round(float(np.min(r["f_in"][tail])), 4),
+                implicit_hi=round(float(np.max(r["f_in"][tail])), 4), seconds=round(sec, 1), result=int(r["result"]))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--only", nargs="*", choices=["helix", "lockup"])
+    ap.add_argument("--dt", type=float, nargs="+", default=[5e-5])
+    args = ap.parse_args(argv)
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
+    rows = []
+    for name, f in (("helix", helix), ("lockup", lockup)):
+        if args.only and name not in args.only:
+            continue
+        for dt in args.dt:
+            rows.append({"commit": commit, **f(dt)})
+            print(rows[-1], flush=True)
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    with open(OUT, "w", newline="") as fh:
+        w = csv.DictWriter(fh, keys)
+        w.writeheader()
+        w.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()
