@@ -5,13 +5,16 @@ each beside the explicit scheme's committed value, with the wall time of both:
   viscous damping 50 1/s, a 0.5 mm mode-6 imperfection) goes over the top of the channel at an
   end load of 2.02–2.04 N with the explicit scheme (the reaction at the save before and at the
   first save with a node over the top, `jaxrod.experiments.helix`; docs/paper.md);
+- `e1`: E1's critical force at μ = 0.3 (60 segments, 1 mm/s, three amplitudes), both schemes
+  run here side by side;
 - `lockup`: the lock-up scene's injection at μL/ℓ = 1, r/ℓ = 0.02, μ = 0.5, far load 2.5 F₀,
   0.3 m at 5 mm/s, damping 20/s, 37 segments: the entry force over the last fifth of the push,
   4.307–4.352 F₀ with the explicit scheme (results/lockup/muL1_far2.5/lockup.json).
 
-Rows (one per case and step) go to `benchmarks/results/rod3d_implicit_gates.csv`.
+Rows (one per case and step) go to `benchmarks/results/rod3d_implicit_gates.csv` (a rerun
+replaces its own rows).
 
-    python benchmarks/rod3d_implicit_gates.py                 # both (~6 min)
+    python benchmarks/rod3d_implicit_gates.py                 # all three (~8 min)
     python benchmarks/rod3d_implicit_gates.py --only helix --dt 5e-5 1e-4
 """
 
@@ -62,19 +65,56 @@ def lockup(dt):
                 implicit_hi=round(float(np.max(r["f_in"][tail])), 4), seconds=round(sec, 1), result=int(r["result"]))
 
 
+def e1(dt):
+    """E1's critical force (the first peak of the pushed end's reaction, `e1_curves`) at μ = 0.3,
+    60 segments, 1 mm/s, sine mode-6 amplitudes 5, 15, 30 mm/s: explicit (half its limit) and
+    implicit (`dt`) in this process."""
+    from jaxrod.experiments.rod3d import e1_curves
+
+    v0s = (5e-3, 15e-3, 30e-3)
+    t0 = time.perf_counter()
+    ex = e1_curves(0.3, v0s, dt_fraction=0.5, scheme="leapfrog")
+    t_ex = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    im = e1_curves(0.3, v0s, scheme="implicit") if dt is None else _e1_at(v0s, dt)
+    t_im = time.perf_counter() - t0
+    fe, fi = np.asarray(ex["critical_force"]), np.asarray(im["critical_force"])
+    return dict(case="E1 critical force, mu 0.3, 60 segments, v0 5/15/30 mm/s [N]", dt=dt,
+                explicit_lo=round(float(fe.min()), 4), explicit_hi=round(float(fe.max()), 4),
+                implicit_lo=round(float(fi.min()), 4), implicit_hi=round(float(fi.max()), 4),
+                per_amplitude_difference_percent=[round(100 * (b / a - 1), 2) for a, b in zip(fe, fi)],
+                seconds=round(t_im, 1), explicit_seconds=round(t_ex, 1))
+
+
+def _e1_at(v0s, dt):
+    from jaxrod.experiments import rod3d as r3
+
+    model_dt = {"dt": dt}
+    orig = r3.Rod3D.default_step
+    r3.Rod3D.default_step = lambda self, q=None: model_dt["dt"]
+    try:
+        return r3.e1_curves(0.3, v0s, scheme="implicit")
+    finally:
+        r3.Rod3D.default_step = orig
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--only", nargs="*", choices=["helix", "lockup"])
+    ap.add_argument("--only", nargs="*", choices=["helix", "lockup", "e1"])
     ap.add_argument("--dt", type=float, nargs="+", default=[5e-5])
     args = ap.parse_args(argv)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
     rows = []
-    for name, f in (("helix", helix), ("lockup", lockup)):
+    for name, f in (("helix", helix), ("lockup", lockup), ("e1", e1)):
         if args.only and name not in args.only:
             continue
         for dt in args.dt:
             rows.append({"commit": commit, **f(dt)})
             print(rows[-1], flush=True)
+    if os.path.exists(OUT):  # rows of other cases and steps are kept; a rerun replaces its own
+        with open(OUT, newline="") as fh:
+            done = {(r["case"], float(r["dt"])) for r in rows}
+            rows = [r for r in csv.DictReader(fh) if (r["case"], float(r["dt"])) not in done] + rows
     keys = list(dict.fromkeys(k for r in rows for k in r))
     with open(OUT, "w", newline="") as fh:
         w = csv.DictWriter(fh, keys)
