@@ -82,7 +82,7 @@ def e1(dt):
     return dict(case="E1 critical force, mu 0.3, 60 segments, v0 5/15/30 mm/s [N]", dt=dt,
                 explicit_lo=round(float(fe.min()), 4), explicit_hi=round(float(fe.max()), 4),
                 implicit_lo=round(float(fi.min()), 4), implicit_hi=round(float(fi.max()), 4),
-                per_amplitude_difference_percent=[round(100 * (b / a - 1), 2) for a, b in zip(fe, fi)],
+                per_amplitude_difference_percent=[round(float(100 * (b / a - 1)), 2) for a, b in zip(fe, fi)],
                 seconds=round(t_im, 1), explicit_seconds=round(t_ex, 1))
 
 
