@@ -77,9 +77,9 @@ def main():
         loop_solve = lambda solve: jax.jit(lambda D, U, b: jax.lax.fori_loop(0, 100, lambda i, b: solve(D, U, b), b))
 
         def loop_hessian(hess):
-            def body(i, c):
-                Dh, _ = hess(model, q.x + 1e-30 * c, q.Q)
-                return c + 1e-20 * Dh[:, 0, :3]
+            def body(i, c):  # every entry of D and U read, so that XLA computes all of them
+                Dh, Uh = hess(model, q.x + 1e-30 * c, q.Q)
+                return c + 1e-20 * (Dh.sum((1, 2)) + jnp.pad(Uh.sum((1, 2)), (0, 1)))[:, None]
             return jax.jit(lambda: jax.lax.fori_loop(0, 100, body, jnp.zeros((n + 1, 3))))
 
         kick = jax.jit(lambda v: jax.lax.fori_loop(
