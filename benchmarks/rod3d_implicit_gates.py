@@ -87,15 +87,9 @@ def e1(dt):
 
 
 def _e1_at(v0s, dt):
-    from jaxrod.experiments import rod3d as r3
+    from jaxrod.experiments.rod3d import e1_curves
 
-    model_dt = {"dt": dt}
-    orig = r3.Rod3D.default_step
-    r3.Rod3D.default_step = lambda self, q=None: model_dt["dt"]
-    try:
-        return r3.e1_curves(0.3, v0s, scheme="implicit")
-    finally:
-        r3.Rod3D.default_step = orig
+    return e1_curves(0.3, v0s, scheme="implicit", dt=dt)
 
 
 def main(argv=None):

@@ -33,7 +33,6 @@ PERTURBATIONS = ("sine", "random-velocity", "random-position", "random-shape")
 DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence) and `default_nodes`
 DEFAULT_MODES = 32
 DEFAULT_SEGMENTS = 60  # the 3D rod, as E1 and E6 (docs/rod3d.md)
-ROD3D_DT_FRACTION = 0.5  # of the 3D rod's explicit step limit
 DEFAULT_T1 = 2.0  # s, as the reference paper
 DT_FRACTION = 0.4  # of the explicit step limit
 SINGLE_MODE_DT = 1e-4  # s
@@ -180,10 +179,10 @@ class Scene(eqx.Module):
         if self.kind == "mode":
             return SINGLE_MODE_DT
         if self.kind == "rod3d":
-            from .rod3d import step_limit
+            from .integrators import default_step
 
             try:
-                return ROD3D_DT_FRACTION * step_limit(self.model())
+                return default_step(self.model())
             except jax.errors.ConcretizationTypeError:
                 raise ValueError("Scene.dt must be given explicitly for the 3D rod when the rod or the load "
                                  "is traced: the step is a static setting.") from None

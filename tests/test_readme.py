@@ -36,7 +36,7 @@ import unicodedata
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-LIMITS = {"README.md": 350, "benchmarks/README.md": 400}
+LIMITS = {"README.md": 350, "benchmarks/README.md": 425}  # + the implicit 3D step's section
 FILES = sorted(LIMITS)
 
 FRAME = re.compile(r"<!-- (include|generated): (.+?) -->\n(.*?)<!-- end \1 -->", re.S)

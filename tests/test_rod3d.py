@@ -15,11 +15,12 @@ from jaxrod.rod3d.so3 import exp_so3, log_so3
 
 def simulate_rod3d(model, state, t1, n_save, *, dt=None, dt_fraction=0.5, law=jr.Coulomb(), scheme=None, **options):
     """The 3D rod through the one `jaxrod.simulate`, with its step `dt_fraction` of the
-    explicit limit at the initial state (as the experiments), with its default scheme
-    (projected leapfrog) or `scheme` (an integrator class)."""
+    explicit limit at the initial state, with the explicit scheme (projected leapfrog: the
+    reference these tests hold the model to; the implicit default has its own,
+    tests/test_rod3d_implicit.py) or `scheme` (an integrator class)."""
     dt = dt_fraction * step_limit(model, state[0]) if dt is None else dt
     opts = jr.RunOptions(**{"stop_when_stuck": False, **options})
-    integrator = jr.integrators.default_for(model, dt, friction=law) if scheme is None else scheme(dt, law)
+    integrator = jr.ProjectedLeapfrog(dt, law) if scheme is None else scheme(dt, law)
     return jr.simulate(model, integrator, *state, t1, n_save=n_save, options=opts, throw=False)
 
 

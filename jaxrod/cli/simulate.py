@@ -80,7 +80,7 @@ def _simulate_rod3d(args, rod) -> int:
     from .._results import RESULTS
     from ..integrators.base import save_grid
     from ..modal import dominant_mode
-    from ..rod3d import Rod3D, sine_velocity, step_limit
+    from ..rod3d import Rod3D, sine_velocity
     from ..experiments.rod3d import run
 
     args.control = args.control or "force"  # the defaults (checked by cli._checks: rod3d only)
@@ -91,11 +91,13 @@ def _simulate_rod3d(args, rod) -> int:
                   preload=F if args.control == "force" else 0.0)
     q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
     n_save = min(args.n_save, 1001)
-    limit = step_limit(model, q0)
+    from ..integrators import default_for, default_step
+
+    limit = float(default_for(model, 1.0).step_limit(model))
     if args.dt is not None and not (0 < args.dt < limit):
-        _fail(f"argument --dt: {args.dt!r} s is invalid: the explicit step limit of this rod is {limit:.4g} s; "
+        _fail(f"argument --dt: {args.dt!r} s is invalid: the step limit of this rod's scheme is {limit:.4g} s; "
               f"use 0 < dt < {limit:.4g} s.")
-    dt = 0.5 * limit if args.dt is None else args.dt
+    dt = default_step(model, q0) if args.dt is None else args.dt
     if args.perturbation != "sine":
         import jax
 

@@ -39,7 +39,7 @@ RUN_COLUMNS = ["dF", "n_segments", "mu", "friction_at", "ends", "sink", "t1", "d
 SINK = 1e-3  # the 3D rod's default contact: it sinks 1e-3·R into the wall under its weight
 
 
-def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, scheme="leapfrog"):
+def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, scheme="implicit"):
     """The jitted label (ΔF [N], v₀ [m/s]) → 1.0 buckled, 0.0 not, NaN for a failed run
     ([`jaxrod.boundary.run_label`][]) of the 3D rod of `n` segments under the
     dead load F⁰₆ + ΔF with a sine mode-6 lateral velocity v₀: the run of
@@ -47,8 +47,8 @@ def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=SINK, sc
     step `dt` [s]) — with the defaults the same run as the scene `Scene(kind="rod3d")`, with
     `friction_at` and `ends` passed to [`jaxrod.rod3d.Rod3D`][], the wall's Hertz constant set so
     that the rod sinks `sink`·R into it under its weight (`Rod3D`'s default: 1e-3), `scheme`
-    `"leapfrog"` ([`jaxrod.ProjectedLeapfrog`][], the 3D rod's default) or `"verlet"`
-    ([`jaxrod.ProjectedVerlet`][])."""
+    `"implicit"` ([`jaxrod.ImplicitLeapfrog`][], the 3D rod's default), `"leapfrog"`
+    ([`jaxrod.ProjectedLeapfrog`][]) or `"verlet"` ([`jaxrod.ProjectedVerlet`][])."""
     from ..boundary import run_label
     from ..integrators import SCHEMES
     from ..integrators.base import RunOptions
@@ -150,7 +150,7 @@ def _bisect(label, guess, width, rtol, max_runs):
 
 
 def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=16, runs_csv=None,
-                friction_at="surface", ends="pinned", sink=SINK, scheme="leapfrog", dt=None, progress=True):
+                friction_at="surface", ends="pinned", sink=SINK, scheme="implicit", dt=None, progress=True):
     """v₀*(ΔF) [m/s] of the 3D rod of `n` segments at each load `dFs` [N] above F⁰₆ (label
     bisection to `rtol` relative bracket width), next to the field model's converged boundary
     search, and the power laws v₀* ∝ ΔF^p fitted to each.
@@ -159,8 +159,9 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     stable), `width` the half-width of the first bracket (relative), `max_runs` per load,
     `runs_csv` the file every finished run is appended to and replayed from, `friction_at` and
     `ends` passed to [`jaxrod.rod3d.Rod3D`][], `sink` the wall's compliance, `scheme` the
-    integrator (see `label_3d`) and `dt` its step [s] (default: the scene's, half the explicit
-    limit; the implicit scheme's own default is `jaxrod.rod3d.IMPLICIT_DT`).
+    integrator (see `label_3d`) and `dt` its step [s] (default: the scheme's,
+    `jaxrod.integrators.default_step`: `jaxrod.rod3d.IMPLICIT_DT` for the implicit leapfrog, half
+    the explicit limit for the explicit ones).
 
     **Returns:** dict with `points` (per load: `dF`, `field`, `rod3d`, `bracket`, `runs`,
     `seconds`), `exponent_rod3d` ± `exponent_rod3d_stderr`, `exponent_field` ± its stderr (the
@@ -172,7 +173,10 @@ def boundary_3d(dFs, *, n=120, mu=0.3, t1=0.4, rtol=0.01, width=0.04, max_runs=1
     dFs = np.sort(np.asarray(dFs, float))
     # one step for every load (the step limit barely moves with the load): one compiled run
     if dt is None:
-        dt = min(Scene(rod, float(dF), SineVelocity(1e-3), kind="rod3d", n=n).step() for dF in dFs)
+        from ..integrators import default_step
+
+        dt = min(default_step(Scene(rod, float(dF), SineVelocity(1e-3), kind="rod3d", n=n).model(), scheme=scheme)
+                 for dF in dFs)
 
     buckled = label_3d(rod, n, dt, t1, friction_at, ends, sink, scheme)
     done = _runs_of(runs_csv, n, mu, t1, dt, friction_at, ends, sink, scheme)

@@ -34,7 +34,8 @@ from .. import theory
 from ..params import RodChannel
 from ..integrators.base import save_grid
 from ..output import subplots, write_csv
-from ..rod3d import Rod3D, step_limit
+from ..integrators import default_step
+from ..rod3d import Rod3D
 
 __all__ = ["load_path", "helix_measures", "helix_theory", "post_buckling", "HELIX_SIZES"]
 
@@ -61,7 +62,7 @@ def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset:
     imperfection of `offset` [m] along the wall; mass-proportional viscous `damping` [1/s]
     removes the kinetic energy of snaps so that the path is close to quasi-static. `scheme` and `dt`
     [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`; default the rod's) and its step
-    (default half the explicit limit at each stage's start).
+    (default the scheme's, `jaxrod.integrators.default_step`, at each stage's start).
 
     **Returns:** dict of NumPy arrays over all saves: `ts`, `d` (end displacement [m]),
     `reaction` (at the pushed end [N]), `x` (node positions), `normal_force`, `axial_force`,
@@ -79,7 +80,7 @@ def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset:
         n_save = max(2, int(round(duration * sps)) + 1)
         if progress:
             print(f"  stage {k}: speed {speed * 1e3:+g} mm/s for {duration:g} s ({n} segments)", flush=True)
-        h = 0.5 * step_limit(model, state[0]) if dt is None else dt
+        h = default_step(model, state[0]) if dt is None else dt
         sol = run(model, *state, duration, n_save, h, stop_on_buckle=False, save_state=True, scheme=scheme)
         if int(sol.result) != 0:
             raise FloatingPointError(f"stage {k} of the load path became non-finite (result {int(sol.result)}).")

@@ -15,7 +15,7 @@ import numpy as np
 from .. import theory
 from .._results import RESULTS
 from ..params import RodChannel
-from ..integrators import default_for
+from ..integrators import default_for, default_step
 from ..integrators.base import RunOptions
 from ..output import subplots, write_csv
 from ..simulate import simulate
@@ -42,21 +42,23 @@ def run(model, q0, v0, t1, n_save, dt, *, threshold=0.5, stop_on_buckle=True, st
     return simulate(model, default_for(model, float(dt), scheme), q0, v0, t1, n_save=n_save, options=opts, throw=False)
 
 
-def _batched(model, states, t1, n_save, dt, threshold, stop_on_buckle=True, stop_when_stuck=True):
+def _batched(model, states, t1, n_save, dt, threshold, stop_on_buckle=True, stop_when_stuck=True, scheme=None):
     """A vmapped batch of runs from the batched initial states `(q0s, v0s)`."""
     return jax.vmap(lambda q, v: run(model, q, v, t1, n_save, dt, threshold=threshold, stop_on_buckle=stop_on_buckle,
-                                     stop_when_stuck=stop_when_stuck))(*states)
+                                     stop_when_stuck=stop_when_stuck, scheme=scheme))(*states)
 
 
 def _first(states):
     return jax.tree_util.tree_map(lambda a: a[0], states[0])
 
 
-def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fraction=0.5):
+def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fraction=None, scheme=None, dt=None):
     """Reaction force against end displacement for a rod pushed at `speed` [m/s] from rest with
     a sine mode-6 lateral velocity of each amplitude in `v0s` [m/s] (one vmapped batch). The
     run of a member stops once it has clearly buckled (max θ > 1 rad, past the force peak).
-    The step is `dt_fraction` × the explicit limit 2/ω_max at the initial state.
+    The scheme is the rod's default or `scheme` (a key of `jaxrod.integrators.SCHEMES`), the step
+    `dt` [s], or the scheme's default (`jaxrod.integrators.default_step`), or `dt_fraction` × the explicit limit 2/ω_max at the
+    initial state.
 
     **Returns:** dict with `displacement` (n_save,) [m], `reaction` (B, n_save) at the pushed
     end [N], `critical_force` (B,) the first peak, where the linear response breaks down [N],
@@ -67,8 +69,10 @@ def e1_curves(mu, v0s, n=60, speed=1e-3, t1=0.8, n_save=801, rod=None, dt_fracti
     rod = RodChannel.reference(mu) if rod is None else rod
     model = Rod3D(rod, n, control="displacement", speed=speed)
     states = jax.vmap(lambda v0: model.initial_state(0.0, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
-    dt = dt_fraction * step_limit(model, _first(states))
-    sol = _batched(model, states, t1, n_save, dt, 1.0)
+    if dt is None:
+        dt = (default_step(model, _first(states), scheme) if dt_fraction is None
+              else dt_fraction * step_limit(model, _first(states)))
+    sol = _batched(model, states, t1, n_save, dt, 1.0, scheme=scheme)
     ts = np.linspace(0.0, t1, n_save)
     R = np.asarray(sol.observables["reaction"][..., 1])
     end_x = np.asarray(sol.observables["end_x"])
@@ -110,7 +114,7 @@ def e6_full(out, quick=False, progress=True):
     q0, v0 = model.initial_state(F0 + 5.0, lateral_velocity=sine_velocity(model, 35e-3))
     if progress:
         print(f"  E6 (full model): {n} segments, 0.1 s", flush=True)
-    sol = run(model, q0, v0, 0.1, 201, 0.5 * step_limit(model, q0), stop_on_buckle=False, stop_when_stuck=False)
+    sol = run(model, q0, v0, 0.1, 201, default_step(model, q0), stop_on_buckle=False, stop_when_stuck=False)
     ts = np.asarray(sol.ts)
     E = {k: np.asarray(v) for k, v in sol.energies.items()}
     total = sum(E.values())
@@ -199,7 +203,7 @@ def crosscheck_critical_velocity(dFs, n=60, mu=0.3, t1=0.4, grid=9, rounds=2, pr
         for k in range(rounds):
             v0s = np.geomspace(lo, hi, grid)
             states = jax.vmap(lambda v0: model.initial_state(F0 + dF, lateral_velocity=sine_velocity(model, v0)))(jnp.asarray(v0s))
-            dt = 0.5 * step_limit(model, _first(states))
+            dt = default_step(model, _first(states))
             sol = _batched(model, states, t1, 11, dt, 0.5, True, True)
             failed = np.asarray(sol.result) != 0
             if failed.any():  # a failed run is not a label: stop rather than count it as stable
@@ -267,7 +271,7 @@ def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps
             model = Rod3D(rod, n, control="load", end_load=F, friction_at=where, friction_sweeps=sw)
             q0, v0 = model.initial_state(F, lateral_offset=R * amplitude * jnp.sin(mode * jnp.pi * s))
             # not stopped when stuck: the question is whether a held rod creeps
-            sol = run(model, q0, v0, t1, 3, 0.5 * step_limit(model, q0), stop_on_buckle=False, stop_when_stuck=False)
+            sol = run(model, q0, v0, t1, 3, default_step(model, q0), stop_on_buckle=False, stop_when_stuck=False)
             d = np.asarray(sol.observables["theta"][-1] - sol.observables["theta"][0])[1:-1]
             res[f"{where}, {sw} sweeps"] = {"max_dtheta": float(np.max(np.abs(d))), "mean_dtheta": float(np.mean(d)),
                                             "all_stuck": bool(jnp.all(sol.v_final.stuck[1:-1])),

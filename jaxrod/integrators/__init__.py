@@ -26,6 +26,16 @@ SCHEMES = {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet, "implicit":
 """The projected schemes by the name a model's `scheme` gives."""
 
 
+def default_step(model, q=None, scheme: str | None = None) -> float:
+    """The step [s] a run of `model` from `q` takes by default with its scheme (or `scheme`, a key of
+    `SCHEMES`): `default_step` of that integrator class (the implicit leapfrog: the model's
+    `implicit_step`; an explicit scheme: half its stability limit at `q`)."""
+    name = model.scheme if scheme is None else scheme
+    if name not in SCHEMES:
+        raise ValueError(f"scheme = {name!r} is invalid: expected one of {tuple(SCHEMES)}.")
+    return SCHEMES[name].default_step(model, q)
+
+
 def default_for(model, dt: float, scheme: str | None = None, **kwargs) -> AbstractFixedStep:
     """The fixed-step integrator a run of `model` uses by default, step `dt` [s] (`kwargs`, e.g.
     `friction`, go to it): `SCHEMES[model.scheme]`, [`jaxrod.ProjectedLeapfrog`][] for the 3D rod,

@@ -198,6 +198,12 @@ class AbstractFixedStep(AbstractIntegrator):
         om = model.max_frequency()
         return jnp.where(om > 0, 2.0 / jnp.where(om > 0, om, 1.0), jnp.inf)
 
+    @classmethod
+    def default_step(cls, model, q=None) -> float:
+        """The step [s] this scheme runs `model` at by default: half its stability limit 2/ω_max
+        at `q` (the 3D rod's experiments' choice; the reduced models' scenes choose their own)."""
+        return float(1.0 / model.max_frequency(q))
+
     def start(self, model: AbstractModel, q0, v0, options: RunOptions) -> RunState:
         """The [`RunState`][] at t = 0 (stuck at once if the initial state is held)."""
         dtype = jnp.result_type(float)

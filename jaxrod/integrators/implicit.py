@@ -55,6 +55,12 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
                             "(use ProjectedLeapfrog or ProjectedVerlet).")
         return model.implicit_kick(q, v, a, hk, h, self.beta, self.gamma)
 
+    @classmethod
+    def default_step(cls, model, q=None) -> float:
+        """The model's accuracy step for this scheme (`model.implicit_step`, [s]), or half the
+        explicit limit at `q` where that is larger (a rod of a few segments)."""
+        return max(float(model.implicit_step), float(1.0 / model.max_frequency(q)))
+
     def step_limit(self, model):
         if self.beta >= 0.25:
             return jnp.inf

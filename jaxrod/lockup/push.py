@@ -129,7 +129,7 @@ def _start(rod, n, imperfection, key, dt_fraction, rod3d, dt=None):
     return model.n, q, v, dt_fraction * float(step_limit(model, q)) if dt is None else float(dt)
 
 
-def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme=None):
+def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme="leapfrog"):
     """Run `phases` — (model, duration [s]) in turn, each from where the last left the rod — and
     record what the scene reports (each phase's first save dropped after the first). With
     `lanes`, each model is a batch (its leaves with a leading lane axis, `inject_lanes`), and so
@@ -172,7 +172,7 @@ def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None, s
 
 
 @eqx.filter_jit
-def _run_lanes(models, q, v, dt, duration, n_save, opts, scheme=None):
+def _run_lanes(models, q, v, dt, duration, n_save, opts, scheme="leapfrog"):
     """One compiled, vmapped run of a batch of models, each lane from its own (q, v)."""
     def one(model, q, v):
         return simulate(model, default_for(model, dt, scheme), q, v, duration, n_save=n_save, options=opts, throw=False)
@@ -219,14 +219,17 @@ def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: 
 
 def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unload: bool = False,
            n: int | None = None, n_save: int = 101, imperfection: float = 1e-3, key=None,
-           dt_fraction: float = 0.3, progress: bool = False, scheme: str | None = None, dt: float | None = None,
+           dt_fraction: float = 0.3, progress: bool = False, scheme: str = "leapfrog", dt: float | None = None,
            **rod3d) -> dict:
     """Inject the rod: the entry (node n) is pushed into the channel at `speed` [m/s] for
     `duration` [s] (then, with `unload`, pulled back as far), while the far end (node 0) slides
     against the dead load `F_far` [N] (`Rod3D.far_load`: a bit pressed on the rock, a catheter tip
     against a vessel). The rod slides toward the far end all along, as the soft-string law
-    assumes. `scheme` and `dt` [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`, default
-    the rod's) and its step (default `dt_fraction` × the explicit limit). **Returns:** as `push`, with `F_in` the entry's axial support force [N] and `F_far`
+    assumes. `scheme` and `dt` [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`) and its
+    step (default `dt_fraction` × the explicit limit). The scene keeps the explicit leapfrog: the
+    implicit one (the 3D rod's default elsewhere) moved the entry force at μL/ℓ = 1, far load
+    2.5 F₀, by +2.8 % at 5e-5 s and +5.6 % at 1e-4 s (`benchmarks/rod3d_implicit_gates.py`).
+    **Returns:** as `push`, with `F_in` the entry's axial support force [N] and `F_far`
     the far load; `u[:, 0]` is how far the far end has moved."""
     speed = _check("speed", speed, 0.0, False, " m/s")
     F_far = _check("F_far", F_far, 0.0, True, " N")

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._banded import block_tridiagonal_matvec, block_tridiagonal_solve
 from . import components as c3
@@ -52,7 +53,7 @@ sees each contact's own mass, not the stiffness that couples it within the step)
 −0.5 %); at 5 N 27.12 and 27.16 at 1e-4 and 5e-5 s against 27.13 (docs/rod3d.md). 67× the
 explicit scheme's step at 500 segments, 8× at 60."""
 
-_E3 = jnp.array([0.0, 0.0, 1.0])
+_E3 = np.array([0.0, 0.0, 1.0])  # NumPy: no JAX computation at import (jax.distributed needs that)
 
 
 def _turned(p, Q):
@@ -64,7 +65,7 @@ def _turned(p, Q):
 def _segment_energy(z, Q, kGA, EA, l0):
     """Stretch and shear energy of one segment [J] as a function of z = (x_a, φ, x_b)."""
     Qp = _turned(z[3:6], Q)
-    s = Qp @ (z[6:9] - z[0:3]) / l0 - _E3.astype(z.dtype)
+    s = Qp @ (z[6:9] - z[0:3]) / l0 - jnp.asarray(_E3, z.dtype)
     return 0.5 * l0 * (kGA * (s[0] ** 2 + s[1] ** 2) + EA * s[2] ** 2)
 
 

@@ -171,18 +171,17 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
 
 
 def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
-    """n (default 60 segments, E1/E6's) and dt: 0.5 of the smallest explicit limit over the
-    rods at the largest load (a given `spec.dt` must lie below it)."""
-    from ..rod3d import Rod3D, step_limit
+    """n (default 60 segments, E1/E6's) and dt: the smallest default step of the rod's scheme
+    (`jaxrod.integrators.default_step`) over the rods at the largest load (a given `spec.dt` must lie below
+    that scheme's stability limit, which the implicit default does not have)."""
+    from ..integrators import default_for, default_step
+    from ..rod3d import Rod3D
 
     n = spec.n or DEFAULT_SEGMENTS
-    limits = []
-    for r in rods:
-        F = float(theory.reference_load(r)) + dF_max
-        limits.append(step_limit(Rod3D(r, n, control="load", end_load=F)))
-    limit = min(limits)
+    models = [Rod3D(r, n, control="load", end_load=float(theory.reference_load(r)) + dF_max) for r in rods]
+    limit = min(float(default_for(m, 1.0).step_limit(m)) for m in models)
     if spec.dt is not None and not (0 < spec.dt < limit):
-        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model 'rod3d': the explicit step limit "
+        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model 'rod3d': the scheme's step limit "
                          f"is {limit:.4g} s; use 0 < dt < {limit:.4g} s.")
-    return n, float(spec.dt or 0.5 * limit), 0.0
+    return n, float(spec.dt or min(default_step(m) for m in models)), 0.0
 

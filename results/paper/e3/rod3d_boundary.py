@@ -9,10 +9,10 @@ last call with every load writes the summary from the recorded runs without runn
     python results/paper/e3/rod3d_boundary.py --n 120 --dF 10 20 40 60 &
     wait; python results/paper/e3/rod3d_boundary.py --n 120 --dF 0.5 1 2 5 10 20 40 60
 
-Writes `rod3d_boundary_n{n}.json` (`_axis` added with `--friction-at axis`, `_leapfrog` with the
-default `--scheme leapfrog`: the files without it hold the runs of projected Verlet, the 3D rod's
-scheme until an earlier revision) (points, both exponents, settings), `.csv` (one row per load,
-plain numbers) and `.png`.
+Writes `rod3d_boundary_n{n}.json` (`_axis` added with `--friction-at axis`, `_implicit` with the
+default `--scheme implicit`, `_leapfrog` with `--scheme leapfrog`: the files without either hold
+the runs of projected Verlet, the 3D rod's scheme until an earlier revision) (points, both
+exponents, settings), `.csv` (one row per load, plain numbers) and `.png`.
 """
 
 from __future__ import annotations
@@ -40,15 +40,16 @@ def main():
                     help="friction at the contact point (default) or at the centre line (no rolling)")
     ap.add_argument("--sink", type=float, default=1e-3,
                     help="the wall's compliance: the rod sinks sink·R into it under its weight")
-    ap.add_argument("--scheme", default="leapfrog", choices=("leapfrog", "verlet"),
-                    help="the integrator: projected leapfrog (the 3D rod's default) or projected Verlet")
+    ap.add_argument("--scheme", default="implicit", choices=("implicit", "leapfrog", "verlet"),
+                    help="the integrator: the implicit leapfrog (the 3D rod's default), projected leapfrog or "
+                         "projected Verlet")
     ap.add_argument("--dir", default=HERE, help="folder of the runs file and the outputs")
     args = ap.parse_args()
     res = boundary_3d(args.dF, n=args.n, rtol=args.rtol, t1=args.t1,
                       friction_at=args.friction_at, sink=args.sink, scheme=args.scheme, runs_csv=os.path.join(args.dir, "rod3d_runs.csv"))
     stem = os.path.join(args.dir, f"rod3d_boundary_n{args.n}" + ("" if args.friction_at == "surface" else "_axis")
                         + ("" if args.sink == 1e-3 else f"_sink{args.sink:g}")
-                        + ("_leapfrog" if args.scheme == "leapfrog" else ""))
+                        + {"leapfrog": "_leapfrog", "implicit": "_implicit"}.get(args.scheme, ""))
     write_boundary(res, stem)
     print(f"3D rod ({args.n} segments): v0* ∝ ΔF^({res['exponent_rod3d']:.3f} ± {res['exponent_rod3d_stderr']:.3f}); "
           f"field model: ΔF^({res['exponent_field']:.3f} ± {res['exponent_field_stderr']:.3f}); theory −0.5")
