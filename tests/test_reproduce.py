@@ -168,7 +168,7 @@ def test_reproduce_with_the_3d_rod_writes_every_point_once(tmp_path):
     res = reproduce(["e3", "e4", "e5", "e6"], str(tmp_path), quick="tiny", model="rod3d", progress=False)
     assert set(res) == {"e3_rod3d", "e4_rod3d", "e5_rod3d", "e6_rod3d"}
     assert res["e3_rod3d"]["n"] == 8 and len(res["e3_rod3d"]["runs"]) == 2
-    files = ("e3/rod3d_runs.csv", "e3/rod3d_boundary_n8_leapfrog.png", "e4/rod3d_n8.csv", "e4/rod3d_n8.png",
+    files = ("e3/rod3d_runs.csv", "e3/rod3d_boundary_n8_implicit.png", "e4/rod3d_n8.csv", "e4/rod3d_n8.png",
              "e5/rod3d_n8.png", "e6/rod3d_random_position_n8.csv")
     assert all((tmp_path / f).exists() for f in files) and res["e5_rod3d"]["n"] == 8
     before = {f: (tmp_path / f).read_text() if f.endswith(".csv") else None for f in files}

@@ -121,13 +121,14 @@ def write_boundary(res: dict, stem: str) -> None:
 
 def e3(out, quick=False, progress=True, n=None) -> dict:
     """E3's boundary of the 3D rod at `n` segments (default: the setting's): writes
-    `rod3d_boundary_n{n}_leapfrog.{json,csv,png}` and the runs file under `out`."""
+    `rod3d_boundary_n{n}_{scheme}.{json,csv,png}` (the 3D rod's default scheme: `implicit`) and
+    the runs file under `out`."""
     from .e3_rod3d import boundary_3d
 
     s = _settings(quick, n)
     res = boundary_3d(s["loads"], n=s["n"], rtol=s["rtol"], t1=s["t1_e3"],
                       runs_csv=os.path.join(out, "rod3d_runs.csv"), progress=progress)
-    write_boundary(res, os.path.join(out, f"rod3d_boundary_n{s['n']}_leapfrog"))
+    write_boundary(res, os.path.join(out, f"rod3d_boundary_n{s['n']}_{res['scheme']}"))
     return dict(n=s["n"], loads=list(s["loads"]), exponent_rod3d=res["exponent_rod3d"],
                 exponent_rod3d_stderr=res["exponent_rod3d_stderr"], exponent_field=res["exponent_field"],
                 exponent_field_stderr=res["exponent_field_stderr"], exponent_paper=PAPER_E3_EXPONENT,

@@ -33,7 +33,7 @@ SIZES = {
 
 def run(model, q0, v0, t1, n_save, dt, *, threshold=0.5, stop_on_buckle=True, stop_when_stuck=True,
         save_state=False, progress=False, scheme=None):
-    """One [`jaxrod.simulate`][] run of the 3D rod with its default scheme (projected leapfrog,
+    """One [`jaxrod.simulate`][] run of the 3D rod with its default scheme (the implicit leapfrog,
     `jaxrod.integrators.default_for`) or `scheme` (a key of `jaxrod.integrators.SCHEMES`) and the
     options of [`jaxrod.RunOptions`][] (same names and defaults; vmap it for a batch, without
     `progress`)."""

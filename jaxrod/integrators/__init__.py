@@ -38,7 +38,7 @@ def default_step(model, q=None, scheme: str | None = None) -> float:
 
 def default_for(model, dt: float, scheme: str | None = None, **kwargs) -> AbstractFixedStep:
     """The fixed-step integrator a run of `model` uses by default, step `dt` [s] (`kwargs`, e.g.
-    `friction`, go to it): `SCHEMES[model.scheme]`, [`jaxrod.ProjectedLeapfrog`][] for the 3D rod,
+    `friction`, go to it): `SCHEMES[model.scheme]`, [`jaxrod.ImplicitLeapfrog`][] for the 3D rod,
     [`jaxrod.ProjectedVerlet`][] for the reduced models; `scheme`, a key of `SCHEMES`, chooses
     another."""
     name = model.scheme if scheme is None else scheme

@@ -24,7 +24,8 @@ class ProjectedLeapfrog(AbstractProjected):
     by static friction has exactly zero velocity and does not move (the hold condition is the
     same, |W⁻¹u| ≤ μ_s N h for the whole step). For models whose friction pass is most of the
     step (the 3D rod: 1.4–1.6× fewer µs per step than projected Verlet, measured at 77a7f3a, docs/rod3d.md)
-    it is the default (`AbstractModel.scheme`); the reduced models keep projected Verlet.
+    it was the default before [`jaxrod.ImplicitLeapfrog`][] (which keeps this structure with an
+    implicit kick); the reduced models keep projected Verlet.
 
     The first step of a run (t = 0) starts from the velocity at t = 0: its kick and friction
     pass are half a step, as velocity Verlet's first half. The velocity recorded at a save

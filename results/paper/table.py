@@ -50,9 +50,10 @@ rows.append(("E3 map: frictionless rod buckles for every ΔF > 0", "yes",
 rows.append(("E3 map: largest stable load ΔF/F⁰cr (μ = 0.3)", "≈ 50 (paper)",
              f"{e3['largest_stable_dF_over_F0cr']:.1f} (largest on the grid)", "field", "jaxrod reproduce e3"))
 # E3 with the full model: boundary searches of the 3D rod (results/paper/e3/rod3d_boundary.py)
-# the finest run over the 8 loads (projected leapfrog, the 3D rod's scheme, or the earlier Verlet)
+# the finest run over the 8 loads (the implicit leapfrog, the 3D rod's default scheme; the explicit
+# projected leapfrog; or the earlier Verlet)
 b3_path = next((p for p in (os.path.join(here, "e3", f"rod3d_boundary_n{n}{s}.json") for n in (500, 240, 120)
-                            for s in ("_leapfrog", ""))
+                            for s in ("_implicit", "_leapfrog", ""))
                 if os.path.exists(p) and len(json.load(open(p))["points"]) >= 8),
                os.path.join(here, "e3", "rod3d_boundary_n120.json"))
 if os.path.exists(b3_path):
