@@ -11,7 +11,11 @@ For n = 60, 120, 240, 500 segments this times, after compilation (min over repea
 - a `jax.vmap` batch of 64 rods (amplitudes 5–40 mm/s) over half that horizon, per rod;
 - with `--boundary`, one 3D boundary point (E3, ΔF = 5 N, `boundary_3d`: label bisection from
   the field model's v₀* ± 4 % to rtol 1e-2) at 500 segments with the implicit scheme, wall time
-  including compilation.
+  including compilation;
+- with `--search`, `jaxrod.boundary.critical_velocity` of the 3D rod (60 segments, ΔF = 20 N,
+  rtol 1e-3, the implicit default) by the departure search (forward-mode tangents through the
+  implicit step) and by bisection, wall time including compilation
+  (`benchmarks/results/rod3d_implicit_search.csv`).
 
 Rows go to `benchmarks/results/rod3d_implicit.csv` and a table to `.md`.
 
@@ -105,6 +109,20 @@ def boundary_point(n=500):
                 runs=p["runs"])
 
 
+def search_methods(n=60, dF=20.0):
+    rows = []
+    rod = jr.RodChannel.reference(0.3)
+    for method in ("departure", "bisection"):
+        t0 = time.perf_counter()
+        r, _ = jr.boundary.critical_velocity(rod, dF, model="rod3d", n=n, method=method, rtol=1e-3, t1=0.4,
+                                             sensitivities=())
+        rows.append(dict(n=n, dF=dF, method=method, v_star_mm_s=round(1e3 * float(r.root), 4),
+                         lo_mm_s=round(1e3 * float(r.lo), 4), hi_mm_s=round(1e3 * float(r.hi), 4),
+                         runs=int(r.evaluations), result=int(r.result), seconds=round(time.perf_counter() - t0, 1)))
+        print(rows[-1], flush=True)
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, nargs="+", default=[60, 120, 240, 500])
@@ -112,7 +130,17 @@ def main(argv=None):
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--boundary", action="store_true", help="also one 3D boundary point at 500 segments")
     ap.add_argument("--quick", action="store_true", help="horizon 5 ms, batch 8")
+    ap.add_argument("--search", action="store_true", help="only: departure against bisection for the 3D v0*")
     args = ap.parse_args(argv)
+    if args.search:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
+        rows = [{"commit": commit, **r} for r in search_methods()]
+        os.makedirs(OUT, exist_ok=True)
+        with open(os.path.join(OUT, "rod3d_implicit_search.csv"), "w", newline="") as fh:
+            w = csv.DictWriter(fh, list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        return
     if args.quick:
         args.horizon, args.batch = 0.005, 8
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
