@@ -26,7 +26,6 @@ Rows go to `benchmarks/results/rod3d_implicit.csv` and a table to `.md`.
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import platform
 import subprocess
@@ -42,6 +41,8 @@ import jax.numpy as jnp  # noqa: E402
 import jaxrod as jr  # noqa: E402
 from jaxrod import theory  # noqa: E402
 from jaxrod.rod3d import IMPLICIT_DT, Rod3D, sine_velocity, step_limit  # noqa: E402
+
+from _common import write_csv  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results")
@@ -135,11 +136,7 @@ def main(argv=None):
     if args.search:
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
         rows = [{"commit": commit, **r} for r in search_methods()]
-        os.makedirs(OUT, exist_ok=True)
-        with open(os.path.join(OUT, "rod3d_implicit_search.csv"), "w", newline="") as fh:
-            w = csv.DictWriter(fh, list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+        write_csv(os.path.join(OUT, "rod3d_implicit_search.csv"), rows)
         return
     if args.quick:
         args.horizon, args.batch = 0.005, 8
@@ -152,11 +149,7 @@ def main(argv=None):
         rows.append(boundary_point())
         print(rows[-1], flush=True)
     os.makedirs(OUT, exist_ok=True)
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with open(os.path.join(OUT, "rod3d_implicit.csv"), "w", newline="") as fh:
-        w = csv.DictWriter(fh, keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(os.path.join(OUT, "rod3d_implicit.csv"), rows)
     head = f"### Implicit against explicit leapfrog ({commit}, {time.strftime('%Y-%m-%d')}, {platform.machine()}, {os.cpu_count()} cores)\n\n"
     lines = [head, "Wall time per simulated second [s] of E3's run (ΔF = 5 N, μ = 0.3, sine 20 mm/s; batch: per rod, "
              "amplitudes 5–40 mm/s), after compilation; the amplitude at the end, implicit against explicit.\n\n",

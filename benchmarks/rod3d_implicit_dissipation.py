@@ -20,7 +20,6 @@ per period fitted as a geometric decay, the largest step taken and the result co
 
 from __future__ import annotations
 
-import csv
 import math
 import os
 import subprocess
@@ -34,6 +33,8 @@ import numpy as np  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
 from jaxrod.rod3d import Rod3D, step_limit  # noqa: E402
+
+from _common import write_csv  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "rod3d_implicit_dissipation.csv")
@@ -86,10 +87,7 @@ def main(periods=4.0):
                              loss_per_period=round(float(per_period), 6) if result == 0 else "",
                              result=result, seconds=round(sec, 1)))
             print(rows[-1], flush=True)
-    with open(OUT, "w", newline="") as fh:
-        w = csv.DictWriter(fh, list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(OUT, rows)
 
 
 if __name__ == "__main__":

@@ -35,6 +35,8 @@ from jaxrod.experiments.helix import helix_measures, load_path  # noqa: E402
 from jaxrod.lockup.push import inject, push_rod, units  # noqa: E402
 from jaxrod.params import RodChannel  # noqa: E402
 
+from _common import write_csv  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "rod3d_implicit_gates.csv")
 
@@ -109,11 +111,7 @@ def main(argv=None):
         with open(OUT, newline="") as fh:
             done = {(r["case"], float(r["dt"])) for r in rows}
             rows = [r for r in csv.DictReader(fh) if (r["case"], float(r["dt"])) not in done] + rows
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with open(OUT, "w", newline="") as fh:
-        w = csv.DictWriter(fh, keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(OUT, rows)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,6 @@ and 500 segments. Rows to `benchmarks/results/rod3d_implicit_parts.csv`.
 
 from __future__ import annotations
 
-import csv
 import os
 import subprocess
 import time
@@ -31,6 +30,8 @@ import jaxrod as jr  # noqa: E402
 from jaxrod._banded import block_tridiagonal_solve  # noqa: E402
 from jaxrod.rod3d import Rod3D, Rod3DPosition  # noqa: E402
 from jaxrod.rod3d.hessian import hessian_blocks, hessian_blocks_ad, implicit_kick  # noqa: E402
+
+from _common import write_csv  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "rod3d_implicit_parts.csv")
@@ -92,10 +93,7 @@ def main():
                    implicit_kick_us=round(per_iteration(kick, v), 1))
         rows.append(row)
         print(row, flush=True)
-    with open(OUT, "w", newline="") as fh:
-        w = csv.DictWriter(fh, list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(OUT, rows)
 
 
 if __name__ == "__main__":

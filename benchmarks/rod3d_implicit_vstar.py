@@ -13,7 +13,6 @@ Rows go to `benchmarks/results/rod3d_implicit_vstar.csv`.
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import subprocess
 import time
@@ -25,6 +24,8 @@ jax.config.update("jax_enable_x64", True)
 import jaxrod as jr  # noqa: E402
 from jaxrod.experiments.e3_rod3d import label_3d  # noqa: E402
 from jaxrod.integrators import SCHEMES, ImplicitLeapfrog  # noqa: E402
+
+from _common import write_csv  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "rod3d_implicit_vstar.csv")
@@ -95,10 +96,7 @@ def main(argv=None):
                          failed=br is None, runs=runs, seconds=round(sec, 1)))
         print(rows[-1], flush=True)
     os.makedirs(os.path.dirname(OUT), exist_ok=True)
-    with open(OUT, "w", newline="") as fh:
-        w = csv.DictWriter(fh, list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(OUT, rows)
 
 
 if __name__ == "__main__":

@@ -33,6 +33,8 @@ import jaxrod as jr  # noqa: E402
 from jaxrod import theory  # noqa: E402
 from jaxrod.rod3d import Rod3D, sine_velocity, step_limit  # noqa: E402
 
+from _common import write_csv  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "rod3d_work_precision")
 EXPLICIT_FRACTIONS = (1.05, 0.9, 0.5, 0.25)
@@ -125,10 +127,7 @@ def main(argv=None):
     for n in args.n:
         rows += [{"commit": commit, **r} for r in measure(n, args.horizon)]
     os.makedirs(os.path.dirname(OUT), exist_ok=True)
-    with open(OUT + ".csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(OUT + ".csv", rows)
     figure(rows, OUT + ".png")
     shutil.copy(OUT + ".png", os.path.join(os.path.dirname(HERE), "docs", "rod3d_work_precision.png"))
 
