@@ -54,7 +54,7 @@ rows.append(("E3 map: largest stable load ΔF/F⁰cr (μ = 0.3)", "≈ 50 (paper
 # projected leapfrog; or the earlier Verlet)
 b3_path = next((p for p in (os.path.join(here, "e3", f"rod3d_boundary_n{n}{s}.json") for n in (500, 240, 120)
                             for s in ("_implicit", "_leapfrog", ""))
-                if os.path.exists(p) and len(json.load(open(p))["points"]) >= 8),
+                if os.path.exists(p) and sum(q["bracket"] is not None for q in json.load(open(p))["points"]) >= 8),
                os.path.join(here, "e3", "rod3d_boundary_n120.json"))
 if os.path.exists(b3_path):
     b3 = json.load(open(b3_path))
