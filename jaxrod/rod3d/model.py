@@ -35,8 +35,9 @@ __all__ = ["Rod3D"]
 class Rod3D(AbstractModel):
     """The discrete 3D rod in the channel. See the module docstring for every equation.
 
-    A model like the others: it runs through [`jaxrod.simulate`][] with [`jaxrod.ProjectedLeapfrog`][]
-    (its `scheme`) or [`jaxrod.ProjectedVerlet`][] and a friction law ([`jaxrod.Coulomb`][], [`jaxrod.Tanh`][]),
+    A model like the others: it runs through [`jaxrod.simulate`][] with [`jaxrod.ImplicitLeapfrog`][]
+    (its `scheme`, at `implicit_step`; it provides `implicit_kick`), [`jaxrod.ProjectedLeapfrog`][] or
+    [`jaxrod.ProjectedVerlet`][] and a friction law ([`jaxrod.Coulomb`][], [`jaxrod.Tanh`][]),
     in sweeps and under `jit`/`vmap`; state: [`Rod3DPosition`][], [`Rod3DVelocity`][] (`initial_state`).
 
     **Arguments:**
