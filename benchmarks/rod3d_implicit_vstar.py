@@ -13,6 +13,7 @@ Rows go to `benchmarks/results/rod3d_implicit_vstar.csv`.
 from __future__ import annotations
 
 import argparse
+import csv
 import os
 import subprocess
 import time
@@ -31,7 +32,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "results", "rod3d_implicit_vstar.csv")
 
 # the explicit leapfrog's v₀* [mm/s] (results/paper/e3/rod3d_boundary_n60_leapfrog.csv, _n500.csv)
-EXPLICIT = {(60, 5.0): 26.192, (60, 20.0): 8.318, (500, 5.0): 27.125, (500, 20.0): 8.235}
+EXPLICIT = {(60, 5.0): 26.192, (60, 20.0): 8.318, (500, 5.0): 27.125, (500, 20.0): 8.235,
+            (500, 60.0): 4.260}  # 60 N at 500 segments: rod3d_boundary_n500_leapfrog.csv
 
 CASES = [  # (segments, ΔF [N], step [s], γ)
     *((60, 5.0, dt, 0.0) for dt in (1.5e-5, 3e-5, 6e-5, 1e-4, 3e-4)),
@@ -41,6 +43,7 @@ CASES = [  # (segments, ΔF [N], step [s], γ)
     *((500, 5.0, dt, 0.1) for dt in (1e-4, 5e-5)),
     *((500, 20.0, dt, 0.1) for dt in (1e-4, 5e-5, 3e-5)),
     (500, 20.0, 1e-4, 0.5),
+    (500, 60.0, 2e-5, 0.1),  # past the wall's wrinkling load (at 5e-5 s every amplitude buckles)
 ]
 
 
@@ -76,12 +79,13 @@ def bisect(label, dF, lo, hi, rtol=2e-3):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--only", type=int, nargs="*", help="segment counts to run")
+    ap.add_argument("--dF", type=float, nargs="*", help="loads to run [N]")
     args = ap.parse_args(argv)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
     rod = jr.RodChannel.reference(0.3)
     rows = []
     for n, dF, dt, gamma in CASES:
-        if args.only and n not in args.only:
+        if (args.only and n not in args.only) or (args.dF and dF not in args.dF):
             continue
         SCHEMES["implicit_g"] = lambda h, g=gamma: ImplicitLeapfrog(h, gamma=g)
         label = label_3d(rod, n, dt, 0.4, scheme="implicit_g")
@@ -96,6 +100,11 @@ def main(argv=None):
                          failed=br is None, runs=runs, seconds=round(sec, 1)))
         print(rows[-1], flush=True)
     os.makedirs(os.path.dirname(OUT), exist_ok=True)
+    if os.path.exists(OUT):  # rows of other cases are kept; a rerun replaces its own
+        key = lambda r: (int(r["n_segments"]), float(r["dF"]), float(r["dt"]), float(r["gamma"]))
+        with open(OUT, newline="") as fh:
+            done = {key(r) for r in rows}
+            rows = [r for r in csv.DictReader(fh) if key(r) not in done] + rows
     write_csv(OUT, rows)
 
 
