@@ -7,6 +7,9 @@ each beside the explicit scheme's committed value, with the wall time of both:
   first save with a node over the top, `jaxrod.experiments.helix`; docs/paper.md);
 - `e1`: E1's critical force at μ = 0.3 (60 segments, 1 mm/s, three amplitudes), both schemes
   run here side by side;
+- `e4`: E4's ΔF* at 500 segments (realization 0 of each perturbation, μ = 0.05, 0.3, 1) with the
+  implicit scheme's default step (`--dt 5e-5` only labels the rows) against the explicit scheme's
+  committed points;
 - `lockup`: the lock-up scene's injection at μL/ℓ = 1, r/ℓ = 0.02, μ = 0.5, far load 2.5 F₀,
   0.3 m at 5 mm/s, damping 20/s, 37 segments: the entry force over the last fifth of the push,
   4.307–4.352 F₀ with the explicit scheme (results/lockup/muL1_far2.5/lockup.json).
@@ -88,6 +91,31 @@ def e1(dt):
                 seconds=round(t_im, 1), explicit_seconds=round(t_ex, 1))
 
 
+E4_POINTS = [(c, mu) for c in "ABC" for mu in (0.05, 0.3, 1.0)]  # realization 0
+
+
+def e4(dt):
+    """E4's ΔF* of the 3D rod at 500 segments (realization 0; sine 15 mm/s, random velocity
+    ±15 mm/s, random position ±2 N/m for 1 ms; μ = 0.05, 0.3, 1; horizon 0.5 s, rtol 1e-2, bracket
+    ×/÷ 1.5 around the field model's) with the implicit scheme at its default step, one row per
+    point, against the explicit scheme's committed row (results/paper/e4/rod3d_n500.csv)."""
+    from jaxrod.experiments.paper3d import e4_point
+
+    with open(os.path.join(os.path.dirname(HERE), "results", "paper", "e4", "rod3d_n500.csv"), newline="") as fh:
+        ref = {(r["case"], float(r["mu"])): r for r in csv.DictReader(fh)
+               if r["realization"] == "0" and r["t1"] == "0.5" and r["width"] == "1.5" and r["result"] == "0"}
+    rows = []
+    for case, mu in E4_POINTS:
+        row = e4_point(case, mu, 0, 500, t1=0.5, width=1.5)
+        r = ref.get((case, mu))
+        rows.append(dict(case=f"E4 {case}, mu {mu}, realization 0, 500 segments: dF* [N]", dt=dt,
+                         explicit_lo=round(float(r["lo"]), 4) if r else "", explicit_hi=round(float(r["hi"]), 4) if r else "",
+                         implicit_lo=round(row["lo"], 4), implicit_hi=round(row["hi"], 4), seconds=row["wall_s"],
+                         explicit_seconds=float(r["wall_s"]) if r else "", result=row["result"]))
+        print(rows[-1], flush=True)
+    return rows
+
+
 def _e1_at(v0s, dt):
     from jaxrod.experiments.rod3d import e1_curves
 
@@ -96,17 +124,19 @@ def _e1_at(v0s, dt):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--only", nargs="*", choices=["helix", "lockup", "e1"])
+    ap.add_argument("--only", nargs="*", choices=["helix", "lockup", "e1", "e4"])
     ap.add_argument("--dt", type=float, nargs="+", default=[5e-5])
     args = ap.parse_args(argv)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
     rows = []
-    for name, f in (("helix", helix), ("lockup", lockup), ("e1", e1)):
+    for name, f in (("helix", helix), ("lockup", lockup), ("e1", e1), ("e4", e4)):
         if args.only and name not in args.only:
             continue
         for dt in args.dt:
-            rows.append({"commit": commit, **f(dt)})
-            print(rows[-1], flush=True)
+            out = f(dt)
+            for r in out if isinstance(out, list) else [out]:
+                rows.append({"commit": commit, **r})
+                print(rows[-1], flush=True)
     if os.path.exists(OUT):  # rows of other cases and steps are kept; a rerun replaces its own
         with open(OUT, newline="") as fh:
             done = {(r["case"], float(r["dt"])) for r in rows}
