@@ -7,9 +7,11 @@ each beside the explicit scheme's committed value, with the wall time of both:
   first save with a node over the top, `jaxrod.experiments.helix`; docs/paper.md);
 - `e1`: E1's critical force at μ = 0.3 (60 segments, 1 mm/s, three amplitudes), both schemes
   run here side by side;
-- `e4`: E4's ΔF* at 500 segments (realization 0 of each perturbation, μ = 0.05, 0.3, 1) with the
-  implicit scheme's default step (`--dt 5e-5` only labels the rows) against the explicit scheme's
-  committed points;
+- `e4`: E4's ΔF* at 500 segments (realization 0 of each perturbation, μ = 0.05, 0.3, 1) at the
+  3D scene's default (`--dt 5e-5` only labels the rows) against the explicit scheme's committed
+  points. The committed rows (0d1abd4) ran the implicit scheme under every perturbation; they
+  showed the random ones off by 2–23 %, so since then a 3D scene runs the implicit scheme only
+  under a sine velocity (`jaxrod.scene.scheme_for`), and a rerun checks the A rows only;
 - `lockup`: the lock-up scene's injection at μL/ℓ = 1, r/ℓ = 0.02, μ = 0.5, far load 2.5 F₀,
   0.3 m at 5 mm/s, damping 20/s, 37 segments: the entry force over the last fifth of the push,
   4.307–4.352 F₀ with the explicit scheme (results/lockup/muL1_far2.5/lockup.json).

@@ -20,6 +20,7 @@ noise.
 from __future__ import annotations
 
 import abc
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -85,6 +86,11 @@ def _noise(p, model, s):
 class AbstractPerturbation(eqx.Module):
     """Maps a model to its initial state (θ₀, θ̇₀) in the model's coordinates."""
 
+    # whether the 3D rod's default implicit scheme was measured to give this perturbation's
+    # answers (docs/rod3d.md, "The implicit step"): E3's sine velocity yes; the random ones moved E4's
+    # ΔF* by 2–23 % at its step, so a 3D scene with them runs the explicit leapfrog (`Scene.scheme`)
+    implicit_3d: ClassVar[bool] = False
+
     @abc.abstractmethod
     def fields(self, model: AbstractModel) -> tuple[Float[Array, " n"], Float[Array, " n"]]:
         """Lateral displacement [m] and velocity [m/s] at the model's sample points."""
@@ -99,6 +105,8 @@ class SineVelocity(AbstractPerturbation):
 
     `v0` [m/s] and `mode` (≥ 1) are dynamic leaves.
     """
+
+    implicit_3d: ClassVar[bool] = True
 
     v0: Float[Array, ""] = eqx.field(converter=_f)
     mode: Float[Array, ""] = eqx.field(converter=_f, default=6.0)

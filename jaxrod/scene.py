@@ -182,7 +182,7 @@ class Scene(eqx.Module):
             from .integrators import default_step
 
             try:
-                return default_step(self.model())
+                return default_step(self.model(), scheme=self.scheme())
             except jax.errors.ConcretizationTypeError:
                 raise ValueError("Scene.dt must be given explicitly for the 3D rod when the rod or the load "
                                  "is traced: the step is a static setting.") from None
@@ -199,10 +199,18 @@ class Scene(eqx.Module):
             return dt
         return min(dt, GROWTH_FRACTION / lam) if lam > 0 else dt
 
+    def scheme(self) -> str | None:
+        """The scheme of the scene's runs (a key of `jaxrod.integrators.SCHEMES`; `None`: the
+        model's own): the 3D rod runs its implicit default only under a perturbation measured
+        adequate for it (`AbstractPerturbation.implicit_3d`: the sine velocity), else the
+        explicit projected leapfrog."""
+        return scheme_for(self.kind, self.perturbation)
+
     def integrator(self) -> AbstractFixedStep:
-        """The run's integrator: the model's default scheme (`jaxrod.integrators.default_for`:
-        projected leapfrog for the 3D rod, projected Verlet for the reduced models) at `step()`."""
-        return default_for(self.model(), self.step())
+        """The run's integrator: the scene's scheme (`scheme`; `jaxrod.integrators.default_for`:
+        the implicit leapfrog for the 3D rod under a sine velocity, else the projected leapfrog;
+        projected Verlet for the reduced models) at `step()`."""
+        return default_for(self.model(), self.step(), self.scheme())
 
     def initial_state(self):
         """(q₀, v₀) in the model's coordinates."""
@@ -254,6 +262,13 @@ class Scene(eqx.Module):
     def dominant_mode(self, q):
         """The dominant sine mode of the state `q` (the model's own mode for one mode)."""
         return dominant_mode_of(self.kind, q, self.mode)
+
+
+def scheme_for(kind: str, perturbation) -> str | None:
+    """The scheme of a run of a model of `kind` under `perturbation` (see `Scene.scheme`)."""
+    if kind == "rod3d" and not type(perturbation).implicit_3d:
+        return "leapfrog"
+    return None
 
 
 def dominant_mode_of(kind: str, q, mode: int = 6):

@@ -91,24 +91,23 @@ def _simulate_rod3d(args, rod) -> int:
                   preload=F if args.control == "force" else 0.0)
     q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
     n_save = min(args.n_save, 1001)
-    from ..integrators import default_for, default_step
+    import jax
 
-    limit = float(default_for(model, 1.0).step_limit(model))
+    from ..integrators import default_for, default_step
+    from ..scene import make_perturbation, scheme_for
+
+    pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
+    scheme = scheme_for("rod3d", pert)  # the implicit default under a sine velocity, else explicit
+    limit = float(default_for(model, 1.0, scheme).step_limit(model))
     if args.dt is not None and not (0 < args.dt < limit):
         _fail(f"argument --dt: {args.dt!r} s is invalid: the step limit of this rod's scheme is {limit:.4g} s; "
               f"use 0 < dt < {limit:.4g} s.")
-    dt = default_step(model, q0) if args.dt is None else args.dt
+    dt = default_step(model, q0, scheme) if args.dt is None else args.dt
     if args.perturbation != "sine":
-        import jax
-
-        from ..integrators import default_for
-        from ..scene import make_perturbation
-
-        pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
-        q0, v0 = pert.initial_state(model, default_for(model, dt))
+        q0, v0 = pert.initial_state(model, default_for(model, dt, scheme))
     threshold = float(model.buckle_threshold)  # held ends: half the amplitude that relieves ΔF
     try:
-        sol = run(model, q0, v0, args.t1, n_save, dt, threshold=threshold, stop_on_buckle=args.control != "displacement",
+        sol = run(model, q0, v0, args.t1, n_save, dt, threshold=threshold, stop_on_buckle=args.control != "displacement", scheme=scheme,
                   stop_when_stuck=args.control != "displacement", save_state=args.export is not None,
                   progress=not args.quiet)
     except ValueError as err:

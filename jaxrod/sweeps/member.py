@@ -16,7 +16,7 @@ from .._results import RESULTS
 from ..integrators import default_for
 from ..integrators.base import RunOptions, save_grid
 from ..params import RodChannel
-from ..scene import dominant_mode_of, DEFAULT_SEGMENTS, Scene, default_nodes, make_perturbation
+from ..scene import dominant_mode_of, DEFAULT_SEGMENTS, Scene, default_nodes, make_perturbation, scheme_for
 from .spec import ROD_FIELDS, SweepSpec, _STIFFNESS_FIELDS
 
 __all__ = ['N_SAVE']
@@ -67,8 +67,10 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     """A member in three pure parts: `setup(params, index, base_key)` gives its model and its
     [`RunState`][jaxrod.integrators.base.RunState] at t = 0, the fixed-step engine advances it
     (`advance`, `finished`), `outputs(ok, model, run)` summarises it. Every model, 3D included."""
-    def integrator(model):  # the model's default scheme, as `Scene.integrator`
-        return default_for(model, dt)
+    scheme = _scheme(spec)
+
+    def integrator(model):  # the scene's scheme, as `Scene.integrator`
+        return default_for(model, dt, scheme)
 
     opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
     m, h = save_grid(spec.t1, N_SAVE, dt)
@@ -179,9 +181,14 @@ def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
 
     n = spec.n or DEFAULT_SEGMENTS
     models = [Rod3D(r, n, control="load", end_load=float(theory.reference_load(r)) + dF_max) for r in rods]
-    limit = min(float(default_for(m, 1.0).step_limit(m)) for m in models)
+    limit = min(float(default_for(m, 1.0, _scheme(spec)).step_limit(m)) for m in models)
     if spec.dt is not None and not (0 < spec.dt < limit):
         raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model 'rod3d': the scheme's step limit "
                          f"is {limit:.4g} s; use 0 < dt < {limit:.4g} s.")
-    return n, float(spec.dt or min(default_step(m) for m in models)), 0.0
+    return n, float(spec.dt or min(default_step(m, scheme=_scheme(spec)) for m in models)), 0.0
+
+
+def _scheme(spec: SweepSpec) -> str | None:
+    """The scheme of the sweep's members (`jaxrod.scene.scheme_for` of its model and perturbation)."""
+    return scheme_for(spec.model, make_perturbation(spec.perturbation, 1.0, spec.mode, None, spec.duration))
 
