@@ -12,6 +12,7 @@ each beside the explicit scheme's committed value, with the wall time of both:
   points. The committed rows (0d1abd4) ran the implicit scheme under every perturbation; they
   showed the random ones off by 2–23 %, so since then a 3D scene runs the implicit scheme only
   under a sine velocity (`jaxrod.scene.scheme_for`), and a rerun checks the A rows only;
+  `--e4-gammas 0.02 0` forces the implicit scheme on E4 C at μ = 0.05 at other γ;
 - `lockup`: the lock-up scene's injection at μL/ℓ = 1, r/ℓ = 0.02, μ = 0.5, far load 2.5 F₀,
   0.3 m at 5 mm/s, damping 20/s, 37 segments: the entry force over the last fifth of the push,
   4.307–4.352 F₀ with the explicit scheme (results/lockup/muL1_far2.5/lockup.json).
@@ -118,6 +119,39 @@ def e4(dt):
     return rows
 
 
+def e4_gamma(gammas, case="C", mu=0.05):
+    """One E4 point (`case`, `mu`, realization 0, 500 segments) with the implicit scheme forced on
+    the 3D scene whatever the perturbation, at each numerical damping γ in `gammas` (the scheme's
+    default step): how γ alone moves a random perturbation's ΔF*."""
+    import equinox as eqx
+
+    from jaxrod import perturbations
+    from jaxrod.experiments.paper3d import e4_point
+    from jaxrod.integrators import SCHEMES, ImplicitLeapfrog
+
+    saved = dict(SCHEMES), {c: c.implicit_3d for c in (perturbations.RandomForce, perturbations.RandomVelocity)}
+    rows = []
+    try:
+        for c in saved[1]:
+            c.implicit_3d = True
+        for g in gammas:
+            class Damped(ImplicitLeapfrog):
+                gamma: float = eqx.field(static=True, default=g)
+
+            SCHEMES["implicit"] = Damped
+            row = e4_point(case, mu, 0, 500, t1=0.5, width=1.5)
+            rows.append(dict(case=f"E4 {case}, mu {mu}, realization 0, 500 segments, implicit forced, gamma {g}: dF* [N]",
+                             dt=5e-5, implicit_lo=round(row["lo"], 4), implicit_hi=round(row["hi"], 4),
+                             seconds=row["wall_s"], result=row["result"]))
+            print(rows[-1], flush=True)
+    finally:
+        SCHEMES.clear()
+        SCHEMES.update(saved[0])
+        for c, v in saved[1].items():
+            c.implicit_3d = v
+    return rows
+
+
 def _e1_at(v0s, dt):
     from jaxrod.experiments.rod3d import e1_curves
 
@@ -128,10 +162,16 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--only", nargs="*", choices=["helix", "lockup", "e1", "e4"])
     ap.add_argument("--dt", type=float, nargs="+", default=[5e-5])
+    ap.add_argument("--e4-gammas", type=float, nargs="+", help="only: E4 C at mu 0.05 with the implicit scheme "
+                    "forced, at each of these gamma")
     args = ap.parse_args(argv)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=HERE).stdout.strip()
     rows = []
+    if args.e4_gammas:
+        rows = [{"commit": commit, **r} for r in e4_gamma(args.e4_gammas)]
     for name, f in (("helix", helix), ("lockup", lockup), ("e1", e1), ("e4", e4)):
+        if args.e4_gammas:
+            break
         if args.only and name not in args.only:
             continue
         for dt in args.dt:
