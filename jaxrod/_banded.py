@@ -5,11 +5,10 @@ couples only neighbouring nodes and segments: ordered as blocks (x_k, φ_k) of s
 block tridiagonal. `block_tridiagonal_solve` factors it by the block Thomas algorithm (a block
 Cholesky: Sₖ = Dₖ − Uₖ₋₁ᵀ Sₖ₋₁⁻¹ Uₖ₋₁) in one forward and one backward `lax.scan` over the
 blocks, each 6×6 Cholesky factor and triangular solve written out entry by entry: a small
-loop body that XLA compiles as one function on the CPU (`jaxrod._xla`). Measured on the
-project's 2-core CPU against the same scan with `jnp.linalg.solve` for each block (LAPACK per
-block): 160 against 1290 µs for 501 blocks (`benchmarks/rod3d_implicit.py` records the cost in
-the step). A parallel (cyclic) reduction would take log₂ n levels of batched 6×6 products but
-compiles each level separately; the scan is the smallest program.
+loop body that XLA compiles as one function on the CPU (`jaxrod._xla`), about 10× faster than
+the same scan with `jnp.linalg.solve` (LAPACK) for each block (`benchmarks/rod3d_implicit_parts.py`).
+A parallel (cyclic) reduction would take log₂ n levels of batched 6×6 products but compiles each
+level separately; the scan is the smallest program.
 """
 
 from __future__ import annotations
@@ -77,7 +76,7 @@ def block_tridiagonal_solve(D: Float[Array, "nb m m"], U: Float[Array, "nb1 m m"
 
 def block_tridiagonal_matvec(D: Float[Array, "nb m m"], U: Float[Array, "nb1 m m"],
                              x: Float[Array, "nb m"]) -> Float[Array, "nb m"]:
-    """A x for the block-tridiagonal A of `block_tridiagonal_solve` (its tests' reference)."""
+    """A x for the block-tridiagonal A of `block_tridiagonal_solve`."""
     out = jnp.einsum("kij,kj->ki", D, x)
     out = out.at[:-1].add(jnp.einsum("kij,kj->ki", U, x[1:]))
     return out.at[1:].add(jnp.einsum("kji,kj->ki", U, x[:-1]))

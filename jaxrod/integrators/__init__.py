@@ -26,14 +26,19 @@ SCHEMES = {"leapfrog": ProjectedLeapfrog, "verlet": ProjectedVerlet, "implicit":
 """The projected schemes by the name a model's `scheme` gives."""
 
 
+def _scheme_class(model, scheme: str | None):
+    """`SCHEMES[scheme]`, or the model's own scheme's class for `None`."""
+    name = model.scheme if scheme is None else scheme
+    if name not in SCHEMES:
+        raise ValueError(f"scheme = {name!r} is invalid: expected one of {tuple(SCHEMES)}.")
+    return SCHEMES[name]
+
+
 def default_step(model, q=None, scheme: str | None = None) -> float:
     """The step [s] a run of `model` from `q` takes by default with its scheme (or `scheme`, a key of
     `SCHEMES`): `default_step` of that integrator class (the implicit leapfrog: the model's
     `implicit_step`; an explicit scheme: half its stability limit at `q`)."""
-    name = model.scheme if scheme is None else scheme
-    if name not in SCHEMES:
-        raise ValueError(f"scheme = {name!r} is invalid: expected one of {tuple(SCHEMES)}.")
-    return SCHEMES[name].default_step(model, q)
+    return _scheme_class(model, scheme).default_step(model, q)
 
 
 def default_for(model, dt: float, scheme: str | None = None, **kwargs) -> AbstractFixedStep:
@@ -41,7 +46,4 @@ def default_for(model, dt: float, scheme: str | None = None, **kwargs) -> Abstra
     `friction`, go to it): `SCHEMES[model.scheme]`, [`jaxrod.ImplicitLeapfrog`][] for the 3D rod,
     [`jaxrod.ProjectedVerlet`][] for the reduced models; `scheme`, a key of `SCHEMES`, chooses
     another."""
-    name = model.scheme if scheme is None else scheme
-    if name not in SCHEMES:
-        raise ValueError(f"scheme = {name!r} is invalid: expected one of {tuple(SCHEMES)}.")
-    return SCHEMES[name](dt, **kwargs)
+    return _scheme_class(model, scheme)(dt, **kwargs)

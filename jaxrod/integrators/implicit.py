@@ -13,9 +13,9 @@ __all__ = ["ImplicitLeapfrog"]
 
 class ImplicitLeapfrog(ProjectedLeapfrog):
     """Projected leapfrog whose kick is implicit in the model's conservative forces:
-    Newmark's average-acceleration scheme in leapfrog form, (M + β h² H(qₙ)) Δv = h F(qₙ), then the
-    friction pass (as [`jaxrod.ProjectedLeapfrog`][]: exact stick, static and dynamic μ) and the
-    drift qₙ₊₁ = qₙ + h v_{n+½}.
+    Newmark's average-acceleration scheme in leapfrog form, (M + (β + γ) h² H(qₙ)) Δv = h F(qₙ) −
+    γ h² H v_{n−½}, then the friction pass (as [`jaxrod.ProjectedLeapfrog`][]: exact stick, static
+    and dynamic μ) and the drift qₙ₊₁ = qₙ + h v_{n+½}.
 
     With β = ¼ (default) it is the trapezoidal rule on a linear system: stable at any step and,
     with γ = 0, without numerical dissipation; 0 < β < ¼ is stable up to a step 2/(ω_max √(1 − 4β));
@@ -24,11 +24,11 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
     the friction pass excites at every stick–slip event (axial, shear, twist: ωh ≫ 1) keep their
     amplitude, aliased to the step's Nyquist frequency, and the friction pass reads them as slip
     (at 60 segments, μ = 0.3, ΔF = 5 N, γ = 0 moved v₀* by −2 % at h = 3e-5 s and −12 % at 1e-4 s,
-    and a step of 3e-4 s blew up; with γ = 0.1 it stays within 0.4 %: `docs/rod3d.md`). The stiffness is linearised at qₙ (one linear solve per step, no Newton
-    iteration: nothing to fail to converge; a matrix that is not positive definite gives a
-    non-finite state and the result code `nonfinite`). The model must provide
-    `implicit_kick(q, v, a, hk, h, beta)` ([`jaxrod.rod3d.Rod3D`][]: a block-tridiagonal solve,
-    `jaxrod.rod3d.hessian`). The friction pass sees each contact's own mass (as in the explicit
+    and a step of 3e-4 s blew up; with γ = 0.1 it stays within 0.4 %: `docs/rod3d.md`). The
+    stiffness is linearised at qₙ (one linear solve per step, no Newton iteration: nothing to fail
+    to converge; a matrix that is not positive definite gives a non-finite state and the result
+    code `nonfinite`). The model must provide `implicit_kick(q, v, a, hk, h, beta, gamma)` and
+    `implicit_step` ([`jaxrod.rod3d.Rod3D`][]: a block-tridiagonal solve, `jaxrod.rod3d.hessian`). The friction pass sees each contact's own mass (as in the explicit
     scheme), not the stiffness that couples it to its neighbours within the step: the coupling
     acts at the next step, a first-order splitting error at stick–slip events.
 
@@ -59,7 +59,7 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
     def default_step(cls, model, q=None) -> float:
         """The model's accuracy step for this scheme (`model.implicit_step`, [s]), or half the
         explicit limit at `q` where that is larger (a rod of a few segments)."""
-        return max(float(model.implicit_step), float(1.0 / model.max_frequency(q)))
+        return max(float(model.implicit_step), super().default_step(model, q))
 
     def step_limit(self, model):
         if self.beta >= 0.25:

@@ -16,7 +16,7 @@ from .._numerics import computed_once
 from .._trig import atan_sqrt, rodrigues
 
 __all__ = ["unpack", "pack", "unpack_matrix", "pack_matrix", "dot", "cross", "add", "sub", "scale",
-           "matvec", "rmatvec", "rotate", "log_rotation", "left_jacobian_inv_t", "relative_rotation"]
+           "matvec", "rmatvec", "gyroscopic", "rotate", "log_rotation", "left_jacobian_inv_t", "relative_rotation"]
 
 
 def unpack(a):
@@ -56,6 +56,11 @@ def sub(a, b):
 
 def scale(s, a):
     return (s * a[0], s * a[1], s * a[2])
+
+
+def gyroscopic(J, W):
+    """ω × Jω for a diagonal inertia J (material frame), both as component tuples."""
+    return cross(W, (J[0] * W[0], J[1] * W[1], J[2] * W[2]))
 
 
 def matvec(A, b):

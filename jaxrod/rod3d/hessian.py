@@ -6,9 +6,9 @@ Q → exp(−[φ]×) Q, `Rod3D.drift`). Ordered as blocks (xₖ, φₖ), k = 0 �
 placeholder with unit mass and no stiffness), the Hessian H of the potential is block
 tridiagonal with 6×6 blocks: the stretch and shear of segment k couple xₖ, φₖ and xₖ₊₁; the
 bend and twist of joint k couple φₖ and φₖ₊₁; the Hertz wall is a 3×3 block per node; gravity,
-body forces and dead loads are linear and add nothing. The segment and joint blocks are
-forward-over-reverse derivatives of each element's energy (the same energies as
-`jaxrod.rod3d.energy`, written per element); the wall's in closed form.
+body forces and dead loads are linear and add nothing. Every block is in closed form
+(`hessian_blocks`); `hessian_blocks_ad`, forward-over-reverse AD of each element's energy (the
+same energies as `jaxrod.rod3d.energy`, written per element), is the tests' reference.
 
 **The implicit kick** (`implicit_kick`) is the kick of Newmark's average-acceleration scheme
 written as a leapfrog: with Δv = v_{n+½} − v_{n−½},
@@ -46,12 +46,11 @@ from .state import Rod3DVelocity, held_pattern
 __all__ = ["IMPLICIT_DT", "hessian_blocks", "hessian_blocks_ad", "implicit_kick"]
 
 IMPLICIT_DT = 5e-5
-"""The implicit leapfrog's default step for the 3D rod [s]: set by accuracy, not stability. E3's
-v₀* at 500 segments (μ = 0.3, sine mode 6) moves with the step at first order (the friction pass
-sees each contact's own mass, not the stiffness that couples it within the step): at ΔF = 20 N
-8.114, 8.179, 8.197 mm/s at 1e-4, 5e-5, 3e-5 s against the explicit scheme's 8.23 (−1.5, −0.7,
-−0.5 %); at 5 N 27.12 and 27.16 at 1e-4 and 5e-5 s against 27.13 (docs/rod3d.md). 67× the
-explicit scheme's step at 500 segments, 8× at 60."""
+"""The implicit leapfrog's default step for the 3D rod [s] (`Rod3D.implicit_step`): set by
+accuracy, not stability. E3's v₀* at 500 segments moves with the step at first order (the friction
+pass sees each contact's own mass, not the stiffness that couples it within the step); this is the
+largest step measured to keep it within 1 % of the explicit scheme's at ΔF = 5 and 20 N
+(docs/rod3d.md, "The implicit step"; benchmarks/results/rod3d_implicit_vstar.csv)."""
 
 _E3 = np.array([0.0, 0.0, 1.0])  # NumPy: no JAX computation at import (jax.distributed needs that)
 
@@ -251,9 +250,7 @@ def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0) -> Rod3
     Ds = s[:, :, None] * D * s[:, None, :]
     Us = s[:-1, :, None] * U * s[1:, None, :]
     c = (beta + gamma) * h * h
-    J = c3.unpack(model.inertia)
-    W = c3.unpack(v.w)
-    gyro = c3.pack(c3.cross(W, (J[0] * W[0], J[1] * W[1], J[2] * W[2])))
+    gyro = c3.pack(c3.gyroscopic(c3.unpack(model.inertia), c3.unpack(v.w)))
     torque = jnp.concatenate([a.tau - gyro, jnp.zeros((1, 3), dtype)])
     rhs = hk * s * jnp.concatenate([a.f, torque], -1)
     if gamma:  # stiffness-proportional damping γ h H v, implicit

@@ -88,9 +88,8 @@ class Rod3D(AbstractModel):
     """
 
     held_is_fixed: ClassVar[bool] = False  # a stuck rod can creep at the contact (issue [rod3d])
-    # the implicit leapfrog (`jaxrod.ImplicitLeapfrog`) at `default_step()`: its step is set by
-    # accuracy, not by the axial, shear, twist and wall stiffness (docs/rod3d.md, "The implicit step")
-    scheme: ClassVar[str] = "implicit"
+    scheme: ClassVar[str] = "implicit"  # `jaxrod.ImplicitLeapfrog` (docs/rod3d.md, "The implicit step")
+    implicit_step: ClassVar[float] = hessian.IMPLICIT_DT  # its step [s], set by accuracy
 
     rod: RodChannel
     n_segments: int = eqx.field(static=True)
@@ -252,20 +251,15 @@ class Rod3D(AbstractModel):
     def kick(self, q, v: Rod3DVelocity, a: Rod3DForces, h) -> Rod3DVelocity:
         """Node velocities by f/m, spins by Euler's equations J ω̇ = τ − ω × Jω; held degrees of
         freedom keep their prescribed values."""
-        J = c3.unpack(self.inertia)
-        W = c3.unpack(v.w)
-        gyro = c3.cross(W, (J[0] * W[0], J[1] * W[1], J[2] * W[2]))
+        J, W = c3.unpack(self.inertia), c3.unpack(v.w)
+        gyro = c3.gyroscopic(J, W)
         tau = c3.unpack(a.tau)
         w = c3.pack(tuple(W[k] + h * (tau[k] - gyro[k]) / J[k] for k in range(3)))
         vn = v.v + h * a.f / self.mass[:, None]
         vn, w = self.constrain(vn, w)
         return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
 
-    def implicit_kick(self, q: Rod3DPosition, v: Rod3DVelocity, a: Rod3DForces, hk, h, beta, gamma=0.0) -> Rod3DVelocity:
-        """The kick of `hk` [s] in an implicit step of `h` [s] with Newmark's `beta`:
-        (M + β h² H) Δ = hk (f, τ − ω × Jω) with the block-tridiagonal Hessian H at `q`
-        (`jaxrod.rod3d.hessian.implicit_kick`, [`jaxrod.ImplicitLeapfrog`][])."""
-        return hessian.implicit_kick(self, q, v, a, hk, h, beta, gamma)
+    implicit_kick = hessian.implicit_kick  # (q, v, a, hk, h, beta, gamma): `jaxrod.ImplicitLeapfrog`'s kick
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
@@ -326,14 +320,9 @@ class Rod3D(AbstractModel):
         return measures.observables(self, q, v, a)
 
     # -- forces and friction ---------------------------------------------------------------
-    def generalized_forces(self, x, Q):
-        return energy.generalized_forces(self, x, Q)
-
-    def contact_normal(self, x, v):
-        return energy.contact_normal(self, x, v)
-
-    def forces(self, x, Q, v):
-        return energy.forces(self, x, Q, v)
+    generalized_forces = energy.generalized_forces  # (x, Q)
+    contact_normal = energy.contact_normal  # (x, v)
+    forces = energy.forces  # (x, Q, v)
 
     def friction_step(self, friction, table, Q, v, w, stuck, force, h):
         """The friction impulses of a (half) step `h` [s]: `contact.friction_pass`."""
@@ -343,10 +332,6 @@ class Rod3D(AbstractModel):
     def constrain(self, v, w):
         held_n, held_s = self.held()
         return jnp.where(held_n, self.prescribed_velocity(), v), jnp.where(held_s, 0.0, w)
-
-    implicit_step = property(lambda self: hessian.IMPLICIT_DT, doc="""The implicit leapfrog's step for
-    this rod [s] (`jaxrod.rod3d.IMPLICIT_DT`: set by accuracy, E3's v₀* at 500 segments within 1 %
-    of the explicit scheme's).""")
 
     def max_frequency(self, q: Rod3DPosition | None = None) -> Float[Array, ""]:
         """ω_max [rad/s] at `q` (default: straight, preloaded): `jaxrod.rod3d.stiffness.frequency_bound`."""
