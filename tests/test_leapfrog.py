@@ -127,7 +127,9 @@ def test_the_velocity_pass_in_the_step_leaves_the_run_as_it_is(kind, scheme):
     moved = False
     for a, b, v in zip(jax.tree_util.tree_leaves(v_at), jax.tree_util.tree_leaves(by_hand),
                        jax.tree_util.tree_leaves(s.v)):
-        b = np.asarray(b, float)  # to rounding of the leaf's largest entry (the sum's order may differ)
-        np.testing.assert_allclose(np.asarray(a, float), b, rtol=0, atol=1e-12 * max(np.max(np.abs(b)), 1e-300))
+        # to rounding of the leaf's largest entry (the sum's order may differ), times the implicit
+        # solve's conditioning: 2e-12 of it seen on the spins
+        b = np.asarray(b, float)
+        np.testing.assert_allclose(np.asarray(a, float), b, rtol=0, atol=1e-11 * max(np.max(np.abs(b)), 1e-300))
         moved |= bool(np.any(np.asarray(a) != np.asarray(v)))
     assert moved  # the pass changed the velocity: the comparison is not of two unchanged copies

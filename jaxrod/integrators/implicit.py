@@ -13,24 +13,27 @@ __all__ = ["ImplicitLeapfrog"]
 
 class ImplicitLeapfrog(ProjectedLeapfrog):
     """Projected leapfrog whose kick is implicit in the model's conservative forces:
-    Newmark's average-acceleration scheme in leapfrog form, (M + (β + γ) h² H(qₙ)) Δv = h F(qₙ) −
-    γ h² H v_{n−½}, then the friction pass (as [`jaxrod.ProjectedLeapfrog`][]: exact stick, static
-    and dynamic μ) and the drift qₙ₊₁ = qₙ + h v_{n+½}.
+    Newmark's average-acceleration scheme in leapfrog form, (M + β h² H(qₙ) + γ h² H_d(qₙ)) Δv =
+    h F(qₙ) − γ h² H_d v_{n−½}, then the friction pass (as [`jaxrod.ProjectedLeapfrog`][]: exact
+    stick, static and dynamic μ) and the drift qₙ₊₁ = qₙ + h v_{n+½}.
 
     With β = ¼ (default) it is the trapezoidal rule on a linear system: stable at any step and,
     with γ = 0, without numerical dissipation; 0 < β < ¼ is stable up to a step 2/(ω_max √(1 − 4β));
-    β = 0 is the explicit leapfrog. γ adds the numerical damping γ h H v (stiffness-proportional,
-    implicit: damping ratio γ h ω / 2 in a mode of frequency ω): without it the stiff modes that
-    the friction pass excites at every stick–slip event (axial, shear, twist: ωh ≫ 1) keep their
-    amplitude, aliased to the step's Nyquist frequency, and the friction pass reads them as slip
-    (at 60 segments, μ = 0.3, ΔF = 5 N, γ = 0 moved v₀* by −2 % at h = 3e-5 s and −12 % at 1e-4 s,
-    and a step of 3e-4 s blew up; with γ = 0.1 it stays within 0.4 %: `docs/rod3d.md`). The
-    stiffness is linearised at qₙ (one linear solve per step, no Newton iteration: nothing to fail
-    to converge; a matrix that is not positive definite gives a non-finite state and the result
-    code `nonfinite`). The model must provide `implicit_kick(q, v, a, hk, h, beta, gamma)` and
-    `implicit_step` ([`jaxrod.rod3d.Rod3D`][]: a block-tridiagonal solve, `jaxrod.rod3d.hessian`). The friction pass sees each contact's own mass (as in the explicit
-    scheme), not the stiffness that couples it to its neighbours within the step: the coupling
-    acts at the next step, a first-order splitting error at stick–slip events.
+    β = 0 is the explicit leapfrog. γ adds the numerical damping γ h H_d v, where H_d is the
+    model's choice of the stiffness that carries no answer (the 3D rod: shear and twist,
+    `jaxrod.rod3d.hessian`): damping ratio γ h ω / 2 in such a mode of frequency ω. Without it
+    the stiff modes that the friction pass excites at every stick–slip event keep their amplitude,
+    aliased to the step's Nyquist frequency, and the friction pass reads them as slip (at 60
+    segments, μ = 0.3, ΔF = 5 N, γ = 0 moved v₀* by −2 % at h = 3e-5 s and −12 % at 1e-4 s, and a
+    step of 3e-4 s blew up: `docs/rod3d.md`). The stiffness is linearised at qₙ (one linear
+    solve per step, no Newton iteration: nothing to fail to converge; a matrix that is not positive
+    definite gives a non-finite state and the result code `nonfinite`). The model must provide
+    `implicit_kick(q, v, a, hk, h, beta, gamma)` and `implicit_step` ([`jaxrod.rod3d.Rod3D`][]: a
+    block-tridiagonal solve, `jaxrod.rod3d.hessian`). The friction pass sees each contact's own
+    mass (as in the explicit scheme), not the stiffness that couples it to its neighbours within
+    the step: the coupling acts at the next step, a first-order splitting error at stick–slip
+    events. (Putting the friction into the solve, an active-set Coulomb law through the coupled
+    system, was tried: it left v₀* unchanged with γ and did not make γ = 0 accurate.)
 
     **Arguments:**
 

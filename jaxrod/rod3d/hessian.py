@@ -20,13 +20,18 @@ which for a linear system is x_{n+1} − 2xₙ + x_{n−1} = −h² M⁻¹K (β 
 without numerical dissipation (every mode keeps its amplitude; its frequency is lowered, by
 (ωh)²/12 relative for ωh ≪ 1, and the modes far above 1/h alias to ≈ π/h). The half kicks
 (the first step, the velocity at a save) are half of Δv: (h/2) (M + β h² H)⁻¹ F with the full
-step's matrix. With the numerical damping γ (stiffness-proportional, implicit):
+step's matrix. With the numerical damping γ (stiffness-proportional, implicit), on the shear and
+twist strains only (H_d: the Hessian of their energies, `hessian_blocks(..., damped=True)`):
 
-    (M + (β + γ) h² H) Δv = h F(qₙ) − γ h² H v_{n−½},
+    (M + β h² H + γ h² H_d) Δv = h F(qₙ) − γ h² H_d v_{n−½},
 
-a damping ratio γhω/2 in a mode of frequency ω: the stiff modes that ωh ≫ 1 aliases are
-damped within a few steps, the slow ones by γhω/2 (`jaxrod.ImplicitLeapfrog`). The gyroscopic
-couple ω × Jω, contact and viscous damping stay explicit. Held
+a damping ratio γhω/2 in a shear or twist mode of frequency ω: those stiff modes, which ωh ≫ 1
+aliases and the friction pass excites at every stick–slip event, are damped within a few steps.
+Bending, the wall and stretch carry the answers and are not damped: damping the whole H moved
+E4's ΔF* under a random position by +23 % (the wall and bending modes) and the lock-up scene's
+entry force by +2.8 % (stretch: the axial vibrations of stick–slip); damping shear and twist alone
+keeps both within 0.2 % of the explicit scheme on the lock-up gate (docs/rod3d.md, "The implicit
+step"). The gyroscopic couple ω × Jω, contact and viscous damping stay explicit. Held
 degrees of freedom are taken out of the system (their rows and columns), and the friction pass
 follows the kick as in the explicit scheme.
 """
@@ -107,16 +112,17 @@ def _pad(a, front: int, back: int):
     return jnp.pad(a, (front, back))
 
 
-def element_blocks(model, x, Q):
+def element_blocks(model, x, Q, damped: bool = False):
     """The stiffness's pieces per segment and joint, as tuples of component arrays (`hessian_blocks`
     assembles them): Hee (n) [N/m], Hep (n) [N], Hpp (n) [N·m], and for the joints (n − 1) RᵀKR,
-    K and KR [N·m]."""
+    K and KR [N·m]. `damped`: of the shear and twist energies only (`DAMPED`)."""
     rod, l0 = model.rod, model.l0
     X = c3.unpack(x)
     Qr = c3.unpack_matrix(Q)
     kGA = model.shear_coefficient * rod.GA
-    S = (kGA, kGA, rod.EA)
-    B = (rod.EI, rod.EI, rod.GJ)
+    zero = jnp.zeros_like(rod.EA)
+    S = (kGA, kGA, zero if damped else rod.EA)
+    B = (zero, zero, rod.GJ) if damped else (rod.EI, rod.EI, rod.GJ)
     e = tuple(X[k][1:] - X[k][:-1] for k in range(3))
     u = c3.matvec(Qr, e)
     nv = (S[0] * u[0] / l0, S[1] * u[1] / l0, S[2] * (u[2] / l0 - 1.0))
@@ -153,7 +159,7 @@ def _wall_components(model, x):
     return radial * e1 * e1 + hoop * (1.0 - e1 * e1), (radial - hoop) * e1 * e2, radial * e2 * e2 + hoop * (1.0 - e2 * e2)
 
 
-def hessian_blocks(model, x, Q):
+def hessian_blocks(model, x, Q, damped: bool = False):
     """The stiffness at (x, Q) in the step's coordinates (module docstring): diagonal blocks D
     (n + 1, 6, 6) and blocks above the diagonal U (n, 6, 6), each ordered (x, y, z, φ₁, φ₂, φ₃)
     [N/m, N, N·m], in closed form.
@@ -166,16 +172,16 @@ def hessian_blocks(model, x, Q):
     are |ψ| (the turn of one joint) relative to these. The Hertz wall: `_wall_blocks`. Checked
     against forward-over-reverse AD of the potential (`hessian_blocks_ad`). Computed on
     component arrays (one per entry, as the forces are: `jaxrod.rod3d.components`) and stacked
-    once."""
-    D, U = _assembled(model, x, Q)
+    once. `damped`: the Hessian of the shear and twist energies alone (`DAMPED`)."""
+    D, U = _assembled(model, x, Q, damped)
     return (jnp.stack([jnp.stack(row, -1) for row in D], -2), jnp.stack([jnp.stack(row, -1) for row in U], -2))
 
 
-def _assembled(model, x, Q):
+def _assembled(model, x, Q, damped: bool = False):
     """The entries of D (n + 1 blocks) and U (n blocks) as 6×6 tuples of component arrays."""
-    Hee, Hep, Hpp, RKR, K, KR = element_blocks(model, x, Q)
+    Hee, Hep, Hpp, RKR, K, KR = element_blocks(model, x, Q, damped)
     zn1 = jnp.zeros_like(x[:, 0])
-    wall = _wall_components(model, x) if model.channel else (zn1, zn1, zn1)
+    wall = _wall_components(model, x) if model.channel and not damped else (zn1, zn1, zn1)
     W = ((zn1, zn1, zn1), (zn1, wall[0], wall[1]), (zn1, wall[1], wall[2]))
     D = [[None] * 6 for _ in range(6)]
     U = [[None] * 6 for _ in range(6)]
@@ -193,18 +199,20 @@ def _assembled(model, x, Q):
     return D, U
 
 
-def hessian_blocks_ad(model, x, Q):
+def hessian_blocks_ad(model, x, Q, damped: bool = False):
     """The exact Hessian of the potential in the blocks of `hessian_blocks`, by forward-over-
     reverse AD of each element's energy (the bend and twist terms that the Gauss–Newton blocks
-    leave out included): the reference the tests hold `hessian_blocks` to; 5–20× slower."""
+    leave out included): the reference the tests hold `hessian_blocks` to; 5–20× slower.
+    `damped`: of the shear and twist energies alone."""
     rod, n, l0 = model.rod, model.n, model.l0
     dtype = x.dtype
     kGA = model.shear_coefficient * rod.GA
+    EA, EI = (0.0 * rod.EA, 0.0 * rod.EI) if damped else (rod.EA, rod.EI)
     zero3 = jnp.zeros((n, 3), dtype)
     zs = jnp.concatenate([x[:-1], zero3, x[1:]], -1)
-    Hs = jax.vmap(jax.hessian(_segment_energy), in_axes=(0, 0, None, None, None))(zs, Q, kGA, rod.EA, l0)
+    Hs = jax.vmap(jax.hessian(_segment_energy), in_axes=(0, 0, None, None, None))(zs, Q, kGA, EA, l0)
     zj = jnp.zeros((n - 1, 6), dtype)
-    Hb = jax.vmap(jax.hessian(_joint_energy), in_axes=(0, 0, 0, None, None, None))(zj, Q[:-1], Q[1:], rod.EI, rod.GJ, l0)
+    Hb = jax.vmap(jax.hessian(_joint_energy), in_axes=(0, 0, 0, None, None, None))(zj, Q[:-1], Q[1:], EI, rod.GJ, l0)
     D = jnp.zeros((n + 1, 6, 6), dtype)
     D = D.at[:-1, :6, :6].add(Hs[:, :6, :6])
     D = D.at[1:, :3, :3].add(Hs[:, 6:, 6:])
@@ -213,7 +221,7 @@ def hessian_blocks_ad(model, x, Q):
     U = jnp.zeros((n, 6, 6), dtype)
     U = U.at[:, :6, :3].add(Hs[:, :6, 6:])
     U = U.at[:-1, 3:, 3:].add(Hb[:, :3, 3:])
-    if model.channel:
+    if model.channel and not damped:
         D = D.at[:, :3, :3].add(_wall_blocks(model, x))
     return D, U
 
@@ -239,8 +247,8 @@ def _inverse(s):
 
 def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0) -> Rod3DVelocity:
     """The kick of `hk` [s] of the implicit leapfrog of step `h` [s] (module docstring):
-    Δ = (M + (β + γ) h² H(q))⁻¹ (hk (f, τ − ω × Jω) − γ h hk H v) on the free degrees of freedom, in units scaled by
-    M^{−½} (the system then reads I + (β + γ) h² M^{−½} H M^{−½}). Held degrees of freedom keep their
+    Δ = (M + β h² H(q) + γ h² H_d(q))⁻¹ (hk (f, τ − ω × Jω) − γ h hk H_d v) on the free degrees of
+    freedom (H_d: shear and twist only), in units scaled by M^{−½}. Held degrees of freedom keep their
     prescribed values. A matrix that is not positive definite (a step far past what the
     compressed rod allows) gives a non-finite state, which the run reports."""
     dtype = v.v.dtype
@@ -249,13 +257,17 @@ def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0) -> Rod3
     s = free / jnp.sqrt(_block_masses(model, dtype))  # M^{-1/2} on the free unknowns, 0 elsewhere
     Ds = s[:, :, None] * D * s[:, None, :]
     Us = s[:-1, :, None] * U * s[1:, None, :]
-    c = (beta + gamma) * h * h
+    c = beta * h * h
     gyro = c3.pack(c3.gyroscopic(c3.unpack(model.inertia), c3.unpack(v.w)))
     torque = jnp.concatenate([a.tau - gyro, jnp.zeros((1, 3), dtype)])
     rhs = hk * s * jnp.concatenate([a.f, torque], -1)
-    if gamma:  # stiffness-proportional damping γ h H v, implicit
+    A_D, A_U = c * Ds + jnp.eye(6, dtype=dtype)[None], c * Us
+    if gamma:  # the damping γ h H_d v of the shear and twist strains, implicit
+        Dd, Ud = hessian_blocks(model, q.x, q.Q, damped=True)
+        Dd, Ud = s[:, :, None] * Dd * s[:, None, :], s[:-1, :, None] * Ud * s[1:, None, :]
         vel = jnp.concatenate([v.v, jnp.concatenate([v.w, jnp.zeros((1, 3), dtype)])], -1) * _inverse(s)
-        rhs = rhs - gamma * h * hk * block_tridiagonal_matvec(Ds, Us, vel)
-    step = s * block_tridiagonal_solve(c * Ds + jnp.eye(6, dtype=dtype)[None], c * Us, rhs)
+        rhs = rhs - gamma * h * hk * block_tridiagonal_matvec(Dd, Ud, vel)
+        A_D, A_U = A_D + gamma * h * h * Dd, A_U + gamma * h * h * Ud
+    step = s * block_tridiagonal_solve(A_D, A_U, rhs)
     vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
     return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
