@@ -58,6 +58,14 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
                             "(use ProjectedLeapfrog or ProjectedVerlet).")
         return model.implicit_kick(q, v, a, hk, h, self.beta, self.gamma)
 
+    def kick_loss(self, model, q, v_prev, v_trial, v_after, hk, h, lost):
+        """`lost` [J] with the work of the numerical damping added (`model.damping_loss`), so that
+        `dissipated` counts it and the energy balance closes."""
+        if not self.gamma:
+            return lost
+        extra = model.damping_loss(q, v_prev, v_trial, v_after, hk, h, self.gamma)
+        return tuple(a + b for a, b in zip(lost, extra))
+
     @classmethod
     def default_step(cls, model, q=None) -> float:
         """The model's accuracy step for this scheme (`model.implicit_step`, [s]), or half the

@@ -51,9 +51,11 @@ class ProjectedLeapfrog(AbstractProjected):
         hk = jnp.where(t > 0, h, 0.5 * h)  # the first step starts from the velocity at t = 0
         if at_position is not None:
             hk = jnp.where(at_position, jnp.where(t > 0, 0.5 * h_save, jnp.zeros_like(hk)), hk)
-        v_trial = self.kick(model, q, v, a, hk, jnp.where(at_position, h_save, h) if at_position is not None else h)
+        h_kick = jnp.where(at_position, h_save, h) if at_position is not None else h
+        v_trial = self.kick(model, q, v, a, hk, h_kick)
         v_new = model.friction_update(self.friction, v_trial, v, hk, t, q, a)
         lost, work_in = model.impulse_work(v, v_trial, v_new, a, hk)
+        lost = self.kick_loss(model, q, v, v_trial, v_new, hk, h_kick, lost)
         v_run = v_new
         if at_position is not None:
             select = lambda new, old: jnp.where(at_position, old, new)
@@ -70,6 +72,11 @@ class ProjectedLeapfrog(AbstractProjected):
     def kick(self, model, q, v, a, hk, h):
         """The kick of `hk` [s] in a step of `h` [s]: `model.kick` (explicit, f/m)."""
         return model.kick(q, v, a, hk)
+
+    def kick_loss(self, model, q, v_prev, v_trial, v_after, hk, h, lost):
+        """`lost` [J] with the energy the kick itself removes added (none here: the kick is
+        conservative)."""
+        return lost
 
     velocity_in_step = True
 

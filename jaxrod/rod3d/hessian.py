@@ -48,7 +48,7 @@ from .energy import _penetration
 from .so3 import skew
 from .state import Rod3DVelocity, held_pattern
 
-__all__ = ["IMPLICIT_DT", "hessian_blocks", "hessian_blocks_ad", "implicit_kick"]
+__all__ = ["IMPLICIT_DT", "damping_loss", "hessian_blocks", "hessian_blocks_ad", "implicit_kick"]
 
 IMPLICIT_DT = 5e-5
 """The implicit leapfrog's default step for the 3D rod [s] (`Rod3D.implicit_step`): set by
@@ -271,3 +271,22 @@ def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0) -> Rod3
     step = s * block_tridiagonal_solve(A_D, A_U, rhs)
     vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
     return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
+
+
+def damping_loss(model, q, v_prev: Rod3DVelocity, v_trial: Rod3DVelocity, v_after: Rod3DVelocity, hk, h, gamma):
+    """The energy the implicit kick's numerical damping removes in a kick of `hk` [s] (step `h`
+    [s]): its impulse P = −γ h H_d (hk v_{n−½} + h Δv) (`implicit_kick`: H_d the shear and twist
+    stiffness, Δv the kick's change) times the mean velocity ½(v_{n−½} + v_{n+½}), on the free
+    degrees of freedom, per node and component and per segment and axis (`(n+1, 3)` and `(n, 3)`
+    [J], as `energy.impulse_work`'s `lost`)."""
+    dtype = v_prev.v.dtype
+    D, U = hessian_blocks(model, q.x, q.Q, damped=True)
+    free = _free(model, dtype)
+
+    def blocks(u):
+        return jnp.concatenate([u.v, jnp.concatenate([u.w, jnp.zeros((1, 3), dtype)])], -1)
+
+    before, trial, after = blocks(v_prev), blocks(v_trial), blocks(v_after)
+    impulse = -gamma * h * block_tridiagonal_matvec(D, U, free * (hk * before + h * (trial - before)))
+    lost = -free * impulse * 0.5 * (before + after)
+    return lost[:, :3], lost[:-1, 3:]

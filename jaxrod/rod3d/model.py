@@ -260,6 +260,7 @@ class Rod3D(AbstractModel):
         return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
 
     implicit_kick = hessian.implicit_kick  # (q, v, a, hk, h, beta, gamma): `jaxrod.ImplicitLeapfrog`'s kick
+    damping_loss = hessian.damping_loss  # the energy its numerical damping removes (`ImplicitLeapfrog.kick_loss`)
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
