@@ -15,7 +15,8 @@ each beside the explicit scheme's committed value, with the wall time of both:
   `--e4-gammas 0.02 0` forces the implicit scheme on E4 C at μ = 0.05 at other γ;
 - `lockup`: the lock-up scene's injection at μL/ℓ = 1, r/ℓ = 0.02, μ = 0.5, far load 2.5 F₀,
   0.3 m at 5 mm/s, damping 20/s, 37 segments: the entry force over the last fifth of the push,
-  4.307–4.352 F₀ with the explicit scheme (results/lockup/muL1_far2.5/lockup.json).
+  4.307–4.352 F₀ with the explicit scheme (results/lockup/muL1_far2.5/lockup.json); with
+  `--lockup-n 37 74` also at 74 segments (explicit 4.237–4.282 F₀, muL1_far2.5_n74/lockup.json);
 
 Rows (one per case and step) go to `benchmarks/results/rod3d_implicit_gates.csv` (a rerun
 replaces its own rows).
@@ -60,16 +61,21 @@ def helix(dt):
                 implicit_lo=round(value[0], 4), implicit_hi=round(value[1], 4), seconds=round(sec, 1))
 
 
-def lockup(dt):
+LOCKUP_EXPLICIT = {37: (4.307, 4.352), 74: (4.237, 4.282)}  # results/lockup/muL1_far2.5{,_n74}/lockup.json
+
+
+def lockup(dt, n=37):
     rod = push_rod(1.0, 0.02, 0.5)
     F0, _ = units(rod)
     t0 = time.perf_counter()
-    r = inject(rod, 2.5 * F0, 0.005, 0.3 / 0.005, n_save=201, damping=20.0, scheme="implicit", dt=dt)
+    r = inject(rod, 2.5 * F0, 0.005, 0.3 / 0.005, n=None if n == 37 else n, n_save=201, damping=20.0,
+               scheme="implicit", dt=dt)
     sec = time.perf_counter() - t0
     loading = r["phase"] == 0
     tail = loading & (r["push"] >= 0.8 * float(np.max(r["push"][loading])))
-    return dict(case="lock-up entry force, muL/ell 1, far 2.5 F0, 37 segments [F0]", dt=dt, explicit_lo=4.307,
-                explicit_hi=4.352, implicit_lo=round(float(np.min(r["f_in"][tail])), 4),
+    lo, hi = LOCKUP_EXPLICIT[n]
+    return dict(case=f"lock-up entry force, muL/ell 1, far 2.5 F0, {n} segments [F0]", dt=dt, explicit_lo=lo,
+                explicit_hi=hi, implicit_lo=round(float(np.min(r["f_in"][tail])), 4),
                 implicit_hi=round(float(np.max(r["f_in"][tail])), 4), seconds=round(sec, 1), result=int(r["result"]))
 
 
@@ -94,7 +100,7 @@ def e1(dt):
                 seconds=round(t_im, 1), explicit_seconds=round(t_ex, 1))
 
 
-E4_POINTS = [(c, mu) for c in "ABC" for mu in (0.05, 0.3, 1.0)]  # realization 0
+E4_POINTS = [("A", mu) for mu in (0.05, 0.3, 1.0)]  # realization 0; B and C run the explicit scheme
 
 
 def e4(dt):
@@ -162,6 +168,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--only", nargs="*", choices=["helix", "lockup", "e1", "e4"])
     ap.add_argument("--dt", type=float, nargs="+", default=[5e-5])
+    ap.add_argument("--lockup-n", type=int, nargs="+", default=[37], choices=sorted(LOCKUP_EXPLICIT),
+                    help="the lock-up scene's segment counts (default 37)")
     ap.add_argument("--e4-gammas", type=float, nargs="+", help="only: E4 C at mu 0.05 with the implicit scheme "
                     "forced, at each of these gamma")
     args = ap.parse_args(argv)
@@ -169,7 +177,8 @@ def main(argv=None):
     rows = []
     if args.e4_gammas:
         rows = [{"commit": commit, **r} for r in e4_gamma(args.e4_gammas)]
-    for name, f in (("helix", helix), ("lockup", lockup), ("e1", e1), ("e4", e4)):
+    lockups = lambda dt: [lockup(dt, n) for n in args.lockup_n]
+    for name, f in (("helix", helix), ("lockup", lockups), ("e1", e1), ("e4", e4)):
         if args.e4_gammas:
             break
         if args.only and name not in args.only:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import jaxrod as jr
-from jaxrod.lockup.push import extents, push, push_rod, units
+from jaxrod.lockup.push import extents, inject, push, push_rod, units
 
 jax.config.update("jax_enable_x64", True)
 
@@ -95,12 +95,13 @@ def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, cap
     μL/ℓ = 1), the far end moves with the entry, and the soft string gives 1 F₀ for every variant
     (no section buckles). Pulled back as far (`--unload`), the friction turns: the entry carries
     F_far − μ_d w L (1 − 1/(2n)) − c·m·v, and the far end comes back to where it started. CSV, JSON
-    and figure are written."""
+    and figure are written. With the explicit scheme: the implicit one's bias on this case is
+    the next test's."""
     from jaxrod.cli import main
 
     out = tmp_path / "lk"
     assert main(["lockup", "--mu-L", "0.5", "--far-load", "0.5", "--push", "0.01", "--out", str(out), "--json",
-                 "--quiet", "--unload"]) == 0
+                 "--quiet", "--unload", "--scheme", "leapfrog"]) == 0
     summary = __import__("json").loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert sorted(p.name for p in out.iterdir()) == ["lockup.csv", "lockup.json", "lockup.png"]
     lo, hi = summary["entry_force_over_F0_last_fifth"]
@@ -143,7 +144,7 @@ def test_lanes_are_single_injections_and_a_locked_lane_is_held():
     F₀ and 1e-9 m: the run in parts puts its saves on a slightly different step grid); a lane
     whose entry force passed `cap` at the end of a part has its entry held still from then on
     (its push stops, to rounding), while the other lanes go on at the set speed."""
-    from jaxrod.lockup.push import inject, inject_lanes, lane
+    from jaxrod.lockup.push import inject_lanes, lane
 
     rod = push_rod(1.0, 0.02, 0.5)
     F0, _ = units(rod)
@@ -186,3 +187,23 @@ def test_past_lock_up_the_far_end_holds_still():
     far = r["u"][after, 0]
     assert abs(far[1] - far[0]) < 1e-3 and np.ptp(far[1:]) < 1e-6
     assert np.min(r["f_in"][after]) > 20.0
+
+
+def test_the_implicit_scheme_biases_a_steady_slide_by_beta_h2_mu_g_EA_over_l():
+    """The straight slide of the test above (μL/ℓ = 0.5, far load 0.5 F₀, 20 segments) with the
+    implicit leapfrog: each step the friction pass takes μ_d g h off every node's velocity through
+    its own mass, and the kick, (M + βh²H) Δv = h F, must give it back; on a uniform Δv the
+    stiffness cancels except next to the held entry, where it leaves βh² (EA/l̂) μ_d g, which the
+    entry carries on top of the soft-string force (`jaxrod.lockup.push.inject`). Measured against
+    that closed form at 2e-5 s: within 2 % (0.0029 F₀; 0.0178 F₀ at the default 5e-5 s)."""
+    rod = push_rod(0.5, 0.02, 0.5)
+    F0, _ = units(rod)
+    h = 2e-5
+    r = inject(rod, 0.5 * F0, 5e-3, 1.5, n_save=101, damping=20.0, dt=h)
+    assert r["scheme"] == "implicit" and r["n"] == 20 and r["dt"] == h
+    tail = r["push"] >= 0.8 * r["push"].max()
+    soft = 0.5 + 0.5 * (1 - 1 / (2 * r["n"])) + 20.0 * float(rod.rho) * float(rod.L) * 5e-3 / F0
+    bias = float(np.mean(r["f_in"][tail])) - soft
+    l0 = float(rod.L) / r["n"]
+    expected = 0.25 * h * h * float(rod.mu_d) * float(rod.g) * float(rod.EA) / l0 / F0
+    assert abs(bias / expected - 1) < 0.02, (bias, expected)

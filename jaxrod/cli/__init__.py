@@ -145,6 +145,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="mass-proportional damping [1/s] that takes out the start's axial wave (default 20)")
     lk.add_argument("--unload", action="store_true", help="then pull the entry back as far")
     lk.add_argument("--n", type=_positive_int, default=None, help="segments (default: 16 per buckle wavelength)")
+    lk.add_argument("--scheme", choices=["implicit", "leapfrog"], default="implicit",
+                    help="time stepping: the implicit leapfrog at its own step (default) or the explicit one "
+                         "at 0.3 of its limit")
     lk.add_argument("--n-save", type=_positive_int, default=201, help="saves per phase (default 201)")
     lk.add_argument("--out", default="results/lockup", help="output folder (default: results/lockup)")
     lk.add_argument("--json", action="store_true", help="print the summary as one JSON object")

@@ -28,7 +28,7 @@ def _cmd_lockup(args) -> int:
               f"r = {1e3 * float(rod.R):.3g} mm, F0 = {F0:.4g} N, ell = {ell:.4g} m); far load {args.far_load:g} F0, "
               f"pushed {args.push:g} m at {1e3 * args.speed:g} mm/s")
     r = inject(rod, args.far_load * F0, args.speed, duration, unload=args.unload, n=args.n, n_save=args.n_save,
-               damping=args.damping, progress=not args.quiet)
+               damping=args.damping, progress=not args.quiet, scheme=args.scheme)
     rows = [dict(t=r["t"][k], push=r["push"][k], far_displacement=r["u"][k, 0], F_in=r["F_in"][k], f_in=r["f_in"][k],
                  F_far=r["F_far"][k], f_far=r["f_far"][k], helical_over_ell=r["helical"][k] / ell,
                  sinusoidal_over_ell=r["sinusoidal"][k] / ell, stuck_fraction=r["stuck_fraction"][k],
@@ -42,7 +42,7 @@ def _cmd_lockup(args) -> int:
     summary = {
         "mu_L_over_ell": args.mu_L, "r_over_ell": args.r_over_ell, "mu": args.mu, "far_load_over_F0": args.far_load,
         "speed": args.speed, "push": args.push, "damping": args.damping, "unload": args.unload,
-        "L": float(rod.L), "r": float(rod.R), "F0": F0, "ell": ell, "n_segments": int(r["n"]), "dt": r["dt"],
+        "L": float(rod.L), "r": float(rod.R), "F0": F0, "ell": ell, "n_segments": int(r["n"]), "scheme": args.scheme, "dt": r["dt"],
         "entry_force_over_F0_last_fifth": [float(np.min(r["f_in"][tail])), float(np.max(r["f_in"][tail]))],
         "helical_over_ell_end": float(r["helical"][loading][-1] / ell),
         "sinusoidal_over_ell_end": float(r["sinusoidal"][loading][-1] / ell),

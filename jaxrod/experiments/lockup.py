@@ -107,7 +107,7 @@ def lockup(out, quick=False, progress=True) -> dict:
                         sinusoidal_over_ell=one["sinusoidal"][i] / ell) for i in range(len(one["t"]))]
     write_csv(os.path.join(out, "lockup_lanes.csv"), rows)
     write_csv(os.path.join(out, "lockup_runs.csv"), series)
-    res = dict(model="rod3d", n_segments=int(rec["n"]), dt=float(rec["dt"]), L_over_ell=Lx, r_over_ell=R_OVER_ELL,
+    res = dict(model="rod3d", n_segments=int(rec["n"]), scheme=rec["scheme"], dt=float(rec["dt"]), L_over_ell=Lx, r_over_ell=R_OVER_ELL,
                L=float(rod.L), r=float(rod.R), F0=F0, ell=ell, speed=SPEED, damping=DAMPING, push=push, lanes=len(lanes),
                cap_over_F0=ell / float(rod.R), cases={})
     for X in S["X"]:

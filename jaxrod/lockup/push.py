@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..integrators import default_for
+from ..integrators import default_for, default_step
 from ..integrators.base import RunOptions
 from ..params import RodChannel
 from ..rod3d import Rod3D, step_limit
@@ -119,14 +119,17 @@ def extents(theta, s, wave):
     return helical.sum(-1) * ds, sinusoidal.sum(-1) * ds
 
 
-def _start(rod, n, imperfection, key, dt_fraction, rod3d, dt=None):
-    """The scene's rod, its straight imperfect start and the step (`dt` [s], default `dt_fraction`
-    × the explicit limit)."""
+def _start(rod, n, imperfection, key, dt_fraction, rod3d, dt=None, scheme="leapfrog"):
+    """The scene's rod, its straight imperfect start and the step (`dt` [s]; default: the
+    implicit scheme's own step, `jaxrod.integrators.default_step`, or `dt_fraction` × the explicit
+    limit for the explicit schemes)."""
     model = push_model(rod, n, **rod3d)
     key = jax.random.key(0) if key is None else key
     offset = _imperfection(model, imperfection * float(rod.R), key)
     q, v = model.initial_state(0.0, lateral_offset=jnp.asarray(offset))
-    return model.n, q, v, dt_fraction * float(step_limit(model, q)) if dt is None else float(dt)
+    if dt is None:
+        dt = default_step(model, q, scheme) if scheme == "implicit" else dt_fraction * float(step_limit(model, q))
+    return model.n, q, v, float(dt)
 
 
 def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme="leapfrog"):
@@ -219,30 +222,33 @@ def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: 
 
 def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unload: bool = False,
            n: int | None = None, n_save: int = 101, imperfection: float = 1e-3, key=None,
-           dt_fraction: float = 0.3, progress: bool = False, scheme: str = "leapfrog", dt: float | None = None,
+           dt_fraction: float = 0.3, progress: bool = False, scheme: str = "implicit", dt: float | None = None,
            **rod3d) -> dict:
     """Inject the rod: the entry (node n) is pushed into the channel at `speed` [m/s] for
     `duration` [s] (then, with `unload`, pulled back as far), while the far end (node 0) slides
     against the dead load `F_far` [N] (`Rod3D.far_load`: a bit pressed on the rock, a catheter tip
     against a vessel). The rod slides toward the far end all along, as the soft-string law
-    assumes. `scheme` and `dt` [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`) and its
-    step (default `dt_fraction` × the explicit limit). The scene keeps the explicit leapfrog: the
-    implicit one (the 3D rod's default elsewhere) moved the entry force at μL/ℓ = 1, far load
-    2.5 F₀, by +2.8 % at 5e-5 s and +5.6 % at 1e-4 s (`benchmarks/rod3d_implicit_gates.py`).
+    assumes. `scheme` and `dt` [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`; default
+    the implicit leapfrog, the 3D rod's, whose entry force at μL/ℓ = 1, far load 2.5 F₀ is the
+    explicit scheme's within 0.3 % at 37 and 74 segments: `benchmarks/rod3d_implicit_gates.py`)
+    and its step (default: the implicit scheme's own, or `dt_fraction` × the explicit limit for
+    `"leapfrog"`/`"verlet"`).
     **Returns:** as `push`, with `F_in` the entry's axial support force [N] and `F_far`
     the far load; `u[:, 0]` is how far the far end has moved."""
     speed = _check("speed", speed, 0.0, False, " m/s")
     F_far = _check("F_far", F_far, 0.0, True, " N")
-    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d, dt)
+    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d, dt, scheme)
     model = lambda sp: Rod3D(rod, n, control="displacement", speed=sp, far_load=F_far, ends="pinned", **rod3d)
     phases = [(model(speed), duration)] + ([(model(-speed), duration)] if unload else [])
     rec = _phases(rod, phases, q, v, dt, n_save, progress, scheme=scheme)
+    rec["scheme"] = scheme
     return _forces(rec, rec["reaction"][:, 1], np.full(len(rec["t"]), F_far))
 
 
 def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float, *, n: int | None = None,
                  n_save: int = 101, chunks: int = 20, cap: float | None = None, imperfection: float = 1e-3,
-                 key=None, dt_fraction: float = 0.3, progress: bool = False, **rod3d) -> dict:
+                 key=None, dt_fraction: float = 0.3, progress: bool = False, scheme: str = "implicit",
+                 dt: float | None = None, **rod3d) -> dict:
     """`inject` for many cases as one compiled, vmapped run: lane k is the rod and channel of
     `rod` (its L, r and material) with the friction coefficient `mus[k]` (static = dynamic, so
     μL/ℓ varies across lanes) against the far load `far_loads[k]` [N]; every lane starts from
@@ -250,7 +256,7 @@ def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float,
     parts (one program; a progress line after each), `n_save` saves in all. A lane whose entry
     force has passed `cap` [F₀] (default ℓ/r, as `locked`) at the end of a part is locked up:
     its entry is held still from then on (the rod has no contact with itself, so pushing on
-    would wind the helix through itself).
+    would wind the helix through itself). `scheme`, `dt`: as `inject`.
 
     **Returns:** as `inject`, with a leading lane axis on every record but `t`, `phase`, `ts`;
     `result` per lane, `mu`, and `held_from` [s] (when each lane's entry was stopped; inf if
@@ -262,7 +268,7 @@ def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float,
     for name, a, closed in (("mus", mus, False), ("far_loads", far_loads, True)):
         for x in a:
             _check(name, x, 0.0, closed)
-    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d)
+    n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d, dt, scheme)
     F0, ell = units(rod)
     cap = ell / float(rod.R) if cap is None else _check("cap", cap, 0.0, False)
 
@@ -282,15 +288,15 @@ def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float,
     per = max(2, math.ceil((n_save - 1) / chunks) + 1)
     q, v = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (mus.size,) + a.shape), (q, v))  # one per lane
     rec = _phases(rod, [(models, duration / chunks)] * chunks, q, v, dt, per, progress, lanes=True,
-                  adjust=hold_locked)
+                  adjust=hold_locked, scheme=scheme)
     rec["phase"] = np.zeros_like(rec["phase"])  # one loading phase, run in parts
-    rec.update(mu=mus, held_from=held_from)
+    rec.update(mu=mus, held_from=held_from, scheme=scheme)
     return _forces(rec, rec["reaction"][..., 1], far_loads[:, None] * np.ones(len(rec["t"])))
 
 
 def lane(rec: dict, k: int) -> dict:
     """Lane `k` of an `inject_lanes` record, as an `inject` record."""
-    shared = ("t", "phase", "ts", "F0", "ell", "r", "n", "dt")
+    shared = ("t", "phase", "ts", "F0", "ell", "r", "n", "dt", "scheme")
     return {name: a if name in shared else a[k] for name, a in rec.items()}
 
 
