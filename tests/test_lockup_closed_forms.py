@@ -380,3 +380,24 @@ def test_the_entry_force_that_pushes_a_far_load_through_the_chain_by_hand():
     assert math.isclose(f(2.5), 2 * math.tan(math.atan(math.sqrt(2)) + x_h / 2), rel_tol=1e-9)
     assert math.isclose(2 / math.tan(0.5), 3.6609754, rel_tol=1e-7)
     assert math.isinf(f(3.7))
+
+
+@pytest.mark.parametrize("onset", sorted(cf.HELICAL_ONSETS))
+@pytest.mark.parametrize("sinusoidal", sorted(cf.SINUSOIDAL_LAWS))
+@pytest.mark.parametrize("helical", sorted(cf.HELICAL_LAWS))
+def test_far_force_of_entry_force_is_the_far_load(onset, sinusoidal, helical):
+    """The round trip far_force(entry_force(F)) = F for every law and onset variant, at μL/ℓ =
+    0.5, 1, 2 and 3 and far loads from 0+ to just below F_far,max(L) (every section of the chain
+    crossed: straight, sinusoidal, helical), and entry_force = inf above F_far,max."""
+    kw = dict(helical_onset=onset, sinusoidal_law=sinusoidal, helical_law=helical)
+    for X in (0.5, 1.0, 2.0, 3.0):
+        L = X * ELL / MU
+        f_max = float(lk.chain.far_force_max(L, *ARGS, MU, **kw)) / F0
+        loads = [f for f in (0.05, 0.5, 1.5, 2.0, 2.5, 3.0, 4.0, 6.0) if f < 0.999 * f_max] + [0.999 * f_max]
+        for f in loads:
+            F_in = lk.chain.entry_force(f * F0, L, *ARGS, MU, **kw)
+            assert np.isfinite(float(F_in)) and float(F_in) >= f * F0
+            back = float(lk.chain.far_force(F_in, L, *ARGS, MU, **kw)) / F0
+            assert math.isclose(back, f, rel_tol=1e-9, abs_tol=1e-12), (X, f, float(F_in) / F0, back)
+        if math.isfinite(f_max):
+            assert math.isinf(float(lk.chain.entry_force(1.001 * f_max * F0, L, *ARGS, MU, **kw)))

@@ -7,6 +7,7 @@ end, its largest value against the length, and the lock-up length.
 
 from . import chain as chain
 from . import closed_forms as closed_forms
+from . import verdict as verdict
 from .chain import (
     far_force as far_force,
 )
