@@ -108,6 +108,8 @@ def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, cap
     expected = 0.5 + 0.5 * (1 - 1 / (2 * summary["n_segments"])) + summary["drag_over_F0"]
     assert abs(lo - expected) < 2e-3 and abs(hi - expected) < 2e-3
     assert all(math.isclose(v, 1.0, rel_tol=1e-9) for v in summary["soft_string_entry_force_over_F0"].values())
+    told = summary["verdict"]  # jaxrod.lockup.verdict: a steady slide, the rod straight (no turn to speak of)
+    assert told["status"] == "sliding" and told["segments_per_turn"] > 1e3 and told["helix_angle"] < 0.1
     rows = (out / "lockup.csv").read_text().splitlines()
     assert rows[0].split(",")[:4] == ["t", "push", "far_displacement", "F_in"] and len(rows) == 1 + 201 + 200
     push, far = (float(x) for x in rows[201].split(",")[1:3])

@@ -16,6 +16,7 @@ def _cmd_lockup(args) -> int:
     from ..lockup import chain
     from ..lockup.closed_forms import HELICAL_LAWS, HELICAL_ONSETS
     from ..lockup.push import inject, push_rod, units
+    from ..lockup.verdict import turn_resolution, verdict
     from ..output import write_csv
 
     # the values were checked by cli._checks (before any work)
@@ -29,11 +30,15 @@ def _cmd_lockup(args) -> int:
               f"pushed {args.push:g} m at {1e3 * args.speed:g} mm/s")
     r = inject(rod, args.far_load * F0, args.speed, duration, unload=args.unload, n=args.n, n_save=args.n_save,
                damping=args.damping, progress=not args.quiet, scheme=args.scheme)
+    l0 = float(rod.L) / int(r["n"])
+    per_turn, angle = turn_resolution(r["theta"], l0, float(rod.R))
     rows = [dict(t=r["t"][k], push=r["push"][k], far_displacement=r["u"][k, 0], F_in=r["F_in"][k], f_in=r["f_in"][k],
                  F_far=r["F_far"][k], f_far=r["f_far"][k], helical_over_ell=r["helical"][k] / ell,
                  sinusoidal_over_ell=r["sinusoidal"][k] / ell, stuck_fraction=r["stuck_fraction"][k],
-                 max_wall_force_over_w=float(np.max(r["wall_force"][k])) / w) for k in range(len(r["t"]))]
+                 max_wall_force_over_w=float(np.max(r["wall_force"][k])) / w, segments_per_turn=per_turn[k],
+                 helix_angle_deg=angle[k]) for k in range(len(r["t"]))]
     loading = r["phase"] == 0
+    told = verdict(r["push"][loading], r["u"][loading, 0], r["f_in"][loading], r["theta"][loading], l0, float(rod.R))
     tail = loading & (r["push"] >= 0.8 * float(np.max(r["push"][loading])))  # the last fifth of the push
     geometry = (float(rod.L), float(rod.EI), w, float(rod.R), args.mu)
     soft = {f"{onset} / {law}": float(chain.entry_force(args.far_load * F0, *geometry, helical_onset=onset,
@@ -48,6 +53,7 @@ def _cmd_lockup(args) -> int:
         "sinusoidal_over_ell_end": float(r["sinusoidal"][loading][-1] / ell),
         "drag_over_F0": args.damping * float(rod.rho) * float(rod.L) * args.speed / F0,
         "soft_string_entry_force_over_F0": soft,
+        "verdict": {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in told.items()},
         "result": RESULTS.describe(r["result"]),
     }
     if args.unload:
@@ -71,6 +77,7 @@ def _cmd_lockup(args) -> int:
             print(f"  pulled back: entry force over the last fifth {u['entry_force_over_F0_last_fifth'][0]:.3f}-"
                   f"{u['entry_force_over_F0_last_fifth'][1]:.3f} F0; at the end helical {u['helical_over_ell_end']:.2f} ell, "
                   f"sinusoidal {u['sinusoidal_over_ell_end']:.2f} ell, far end moved {1e3 * u['far_end_moved_m']:.1f} mm")
+        print(f"  verdict (jaxrod.lockup.verdict): {told['status']}: {told['reason']}")
         print(f"  result: {summary['result']}; wrote {args.out}/lockup.csv, lockup.json, lockup.png")
     return 0 if r["result"] == 0 else 1
 

@@ -58,13 +58,18 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
                             "(use ProjectedLeapfrog or ProjectedVerlet).")
         return model.implicit_kick(q, v, a, hk, h, self.beta, self.gamma)
 
-    def kick_loss(self, model, q, v_prev, v_trial, v_after, hk, h, lost):
-        """`lost` [J] with the work of the numerical damping added (`model.damping_loss`), so that
-        `dissipated` counts it and the energy balance closes."""
-        if not self.gamma:
+    def kick_with_aux(self, model, q, v, a, hk, h):
+        """The kick and the damping's impulse it applied (`model.implicit_kick(..., with_impulse=True)`)."""
+        if not self.gamma or not hasattr(model, "implicit_kick"):  # (`kick` names a model without it)
+            return self.kick(model, q, v, a, hk, h), None
+        return model.implicit_kick(q, v, a, hk, h, self.beta, self.gamma, with_impulse=True)
+
+    def kick_loss(self, model, v_prev, v_after, aux, lost):
+        """`lost` [J] with the work of the numerical damping added (`model.damping_loss` of the
+        impulse the kick applied), so that `dissipated` counts it."""
+        if aux is None:
             return lost
-        extra = model.damping_loss(q, v_prev, v_trial, v_after, hk, h, self.gamma)
-        return tuple(a + b for a, b in zip(lost, extra))
+        return tuple(a + b for a, b in zip(lost, model.damping_loss(v_prev, v_after, aux)))
 
     @classmethod
     def default_step(cls, model, q=None) -> float:

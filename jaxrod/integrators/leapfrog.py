@@ -52,10 +52,10 @@ class ProjectedLeapfrog(AbstractProjected):
         if at_position is not None:
             hk = jnp.where(at_position, jnp.where(t > 0, 0.5 * h_save, jnp.zeros_like(hk)), hk)
         h_kick = jnp.where(at_position, h_save, h) if at_position is not None else h
-        v_trial = self.kick(model, q, v, a, hk, h_kick)
+        v_trial, aux = self.kick_with_aux(model, q, v, a, hk, h_kick)
         v_new = model.friction_update(self.friction, v_trial, v, hk, t, q, a)
         lost, work_in = model.impulse_work(v, v_trial, v_new, a, hk)
-        lost = self.kick_loss(model, q, v, v_trial, v_new, hk, h_kick, lost)
+        lost = self.kick_loss(model, v, v_new, aux, lost)
         v_run = v_new
         if at_position is not None:
             select = lambda new, old: jnp.where(at_position, old, new)
@@ -73,7 +73,11 @@ class ProjectedLeapfrog(AbstractProjected):
         """The kick of `hk` [s] in a step of `h` [s]: `model.kick` (explicit, f/m)."""
         return model.kick(q, v, a, hk)
 
-    def kick_loss(self, model, q, v_prev, v_trial, v_after, hk, h, lost):
+    def kick_with_aux(self, model, q, v, a, hk, h):
+        """`(kick, aux)`: the kick and what `kick_loss` needs of it (nothing here)."""
+        return self.kick(model, q, v, a, hk, h), None
+
+    def kick_loss(self, model, v_prev, v_after, aux, lost):
         """`lost` [J] with the energy the kick itself removes added (none here: the kick is
         conservative)."""
         return lost

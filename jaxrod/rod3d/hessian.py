@@ -21,7 +21,8 @@ without numerical dissipation (every mode keeps its amplitude; its frequency is 
 (ωh)²/12 relative for ωh ≪ 1, and the modes far above 1/h alias to ≈ π/h). The half kicks
 (the first step, the velocity at a save) are half of Δv: (h/2) (M + β h² H)⁻¹ F with the full
 step's matrix. With the numerical damping γ (stiffness-proportional, implicit), on the shear and
-twist strains only (H_d: the Hessian of their energies, `hessian_blocks(..., damped=True)`):
+twist strains only (H_d: the Hessian of their energies, `hessian_blocks(..., damped=True)`; the
+kick assembles β H + γ H_d in one pass, every piece being linear in the stiffnesses):
 
     (M + β h² H + γ h² H_d) Δv = h F(qₙ) − γ h² H_d v_{n−½},
 
@@ -42,7 +43,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._banded import block_tridiagonal_matvec, block_tridiagonal_solve
+from .._banded import block_tridiagonal_solve
 from . import components as c3
 from .energy import _penetration
 from .so3 import skew
@@ -112,17 +113,22 @@ def _pad(a, front: int, back: int):
     return jnp.pad(a, (front, back))
 
 
-def element_blocks(model, x, Q, damped: bool = False):
+ALL, DAMPED = (1.0, 1.0, 1.0, 1.0), (0.0, 1.0, 0.0, 1.0)  # weights of (stretch, shear, bend, twist)
+
+
+def element_blocks(model, x, Q, weights=ALL):
     """The stiffness's pieces per segment and joint, as tuples of component arrays (`hessian_blocks`
     assembles them): Hee (n) [N/m], Hep (n) [N], Hpp (n) [N·m], and for the joints (n − 1) RᵀKR,
-    K and KR [N·m]. `damped`: of the shear and twist energies only (`DAMPED`)."""
+    K and KR [N·m]. Each piece is linear in the stiffnesses, so `weights` (of stretch, shear,
+    bend and twist: `ALL`, or `DAMPED`, shear and twist only) gives any combination of the
+    energies' Hessians in one pass."""
     rod, l0 = model.rod, model.l0
     X = c3.unpack(x)
     Qr = c3.unpack_matrix(Q)
-    kGA = model.shear_coefficient * rod.GA
-    zero = jnp.zeros_like(rod.EA)
-    S = (kGA, kGA, zero if damped else rod.EA)
-    B = (zero, zero, rod.GJ) if damped else (rod.EI, rod.EI, rod.GJ)
+    stretch, shear, bend, twist = weights
+    kGA = shear * model.shear_coefficient * rod.GA
+    S = (kGA, kGA, stretch * rod.EA)
+    B = (bend * rod.EI, bend * rod.EI, twist * rod.GJ)
     e = tuple(X[k][1:] - X[k][:-1] for k in range(3))
     u = c3.matvec(Qr, e)
     nv = (S[0] * u[0] / l0, S[1] * u[1] / l0, S[2] * (u[2] / l0 - 1.0))
@@ -173,15 +179,17 @@ def hessian_blocks(model, x, Q, damped: bool = False):
     against forward-over-reverse AD of the potential (`hessian_blocks_ad`). Computed on
     component arrays (one per entry, as the forces are: `jaxrod.rod3d.components`) and stacked
     once. `damped`: the Hessian of the shear and twist energies alone (`DAMPED`)."""
-    D, U = _assembled(model, x, Q, damped)
+    D, U = _assembled(model, x, Q, DAMPED if damped else ALL, 0.0 if damped else 1.0)
     return (jnp.stack([jnp.stack(row, -1) for row in D], -2), jnp.stack([jnp.stack(row, -1) for row in U], -2))
 
 
-def _assembled(model, x, Q, damped: bool = False):
-    """The entries of D (n + 1 blocks) and U (n blocks) as 6×6 tuples of component arrays."""
-    Hee, Hep, Hpp, RKR, K, KR = element_blocks(model, x, Q, damped)
+def _assembled(model, x, Q, weights=ALL, wall_weight=1.0):
+    """The entries of D (n + 1 blocks) and U (n blocks) as 6×6 tuples of component arrays, of the
+    energies weighted by `weights` (`element_blocks`) and the wall by `wall_weight`."""
+    Hee, Hep, Hpp, RKR, K, KR = element_blocks(model, x, Q, weights)
     zn1 = jnp.zeros_like(x[:, 0])
-    wall = _wall_components(model, x) if model.channel and not damped else (zn1, zn1, zn1)
+    wall = _wall_components(model, x) if model.channel and wall_weight else (zn1, zn1, zn1)
+    wall = tuple(wall_weight * w for w in wall)
     W = ((zn1, zn1, zn1), (zn1, wall[0], wall[1]), (zn1, wall[1], wall[2]))
     D = [[None] * 6 for _ in range(6)]
     U = [[None] * 6 for _ in range(6)]
@@ -226,6 +234,23 @@ def hessian_blocks_ad(model, x, Q, damped: bool = False):
     return D, U
 
 
+def _stacked(D, U):
+    return (jnp.stack([jnp.stack(row, -1) for row in D], -2), jnp.stack([jnp.stack(row, -1) for row in U], -2))
+
+
+def _component_matvec(D, U, x):
+    """A x (n + 1, 6) for the block-tridiagonal A given as 6×6 tuples of component arrays (`_assembled`),
+    without stacking them."""
+    cols = [x[:, b] for b in range(6)]
+    out = []
+    for a in range(6):
+        own = sum(D[a][b] * cols[b] for b in range(6))
+        up = sum(U[a][b] * cols[b][1:] for b in range(6))  # block (k, k + 1)
+        down = sum(U[b][a] * cols[b][:-1] for b in range(6))  # block (k + 1, k) = U_kᵀ
+        out.append(own + jnp.pad(up, (0, 1)) + jnp.pad(down, (1, 0)))
+    return jnp.stack(out, -1)
+
+
 def _block_masses(model, dtype):
     """The diagonal of the mass matrix per block (n + 1, 6) [kg, kg·m²] (1 for the placeholder)."""
     m = jnp.broadcast_to(model.mass.astype(dtype)[:, None], (model.n + 1, 3))
@@ -240,53 +265,49 @@ def _free(model, dtype):
     return jnp.concatenate([jnp.asarray(~held_n, dtype), free_s], -1)
 
 
-def _inverse(s):
-    """1/s where s > 0, else 0."""
-    return jnp.where(s > 0, 1.0 / jnp.where(s > 0, s, 1.0), 0.0)
-
-
-def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0) -> Rod3DVelocity:
+def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_impulse: bool = False):
     """The kick of `hk` [s] of the implicit leapfrog of step `h` [s] (module docstring):
     Δ = (M + β h² H(q) + γ h² H_d(q))⁻¹ (hk (f, τ − ω × Jω) − γ h hk H_d v) on the free degrees of
     freedom (H_d: shear and twist only), in units scaled by M^{−½}. Held degrees of freedom keep their
     prescribed values. A matrix that is not positive definite (a step far past what the
-    compressed rod allows) gives a non-finite state, which the run reports."""
+    compressed rod allows) gives a non-finite state, which the run reports. With `with_impulse`,
+    also the damping's impulse P = −γ h H_d (hk v + h Δ) by blocks (n + 1, 6) [N·s, N·m·s]
+    (`damping_loss`; zeros with γ = 0)."""
     dtype = v.v.dtype
-    D, U = hessian_blocks(model, q.x, q.Q)
+    # β H + γ H_d in one pass (each piece is linear in the stiffnesses), H_d for the damping force
+    weights = ALL if not gamma else (beta, beta + gamma, beta, beta + gamma)
+    D, U = _stacked(*_assembled(model, q.x, q.Q, weights, 1.0 if not gamma else beta))
     free = _free(model, dtype)
     s = free / jnp.sqrt(_block_masses(model, dtype))  # M^{-1/2} on the free unknowns, 0 elsewhere
     Ds = s[:, :, None] * D * s[:, None, :]
     Us = s[:-1, :, None] * U * s[1:, None, :]
-    c = beta * h * h
+    c = (beta if not gamma else 1.0) * h * h
     gyro = c3.pack(c3.gyroscopic(c3.unpack(model.inertia), c3.unpack(v.w)))
     torque = jnp.concatenate([a.tau - gyro, jnp.zeros((1, 3), dtype)])
     rhs = hk * s * jnp.concatenate([a.f, torque], -1)
     A_D, A_U = c * Ds + jnp.eye(6, dtype=dtype)[None], c * Us
-    if gamma:  # the damping γ h H_d v of the shear and twist strains, implicit
-        Dd, Ud = hessian_blocks(model, q.x, q.Q, damped=True)
-        Dd, Ud = s[:, :, None] * Dd * s[:, None, :], s[:-1, :, None] * Ud * s[1:, None, :]
-        vel = jnp.concatenate([v.v, jnp.concatenate([v.w, jnp.zeros((1, 3), dtype)])], -1) * _inverse(s)
-        rhs = rhs - gamma * h * hk * block_tridiagonal_matvec(Dd, Ud, vel)
-        A_D, A_U = A_D + gamma * h * h * Dd, A_U + gamma * h * h * Ud
+    vel = jnp.where(s > 0, jnp.concatenate([v.v, jnp.concatenate([v.w, jnp.zeros((1, 3), dtype)])], -1), 0.0)
+    if gamma:  # the damping γ h H_d v of the shear and twist strains, implicit (its matrix is in A)
+        Hd = _assembled(model, q.x, q.Q, DAMPED, 0.0)
+        rhs = rhs - gamma * h * hk * s * _component_matvec(*Hd, vel)
     step = s * block_tridiagonal_solve(A_D, A_U, rhs)
     vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
-    return Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
+    out = Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
+    if not with_impulse:
+        return out
+    impulse = jnp.where(s > 0, -gamma * h * _component_matvec(*Hd, hk * vel + h * step), 0.0) if gamma else jnp.zeros_like(vel)
+    return out, impulse
 
 
-def damping_loss(model, q, v_prev: Rod3DVelocity, v_trial: Rod3DVelocity, v_after: Rod3DVelocity, hk, h, gamma):
-    """The energy the implicit kick's numerical damping removes in a kick of `hk` [s] (step `h`
-    [s]): its impulse P = −γ h H_d (hk v_{n−½} + h Δv) (`implicit_kick`: H_d the shear and twist
-    stiffness, Δv the kick's change) times the mean velocity ½(v_{n−½} + v_{n+½}), on the free
-    degrees of freedom, per node and component and per segment and axis (`(n+1, 3)` and `(n, 3)`
-    [J], as `energy.impulse_work`'s `lost`)."""
+def damping_loss(model, v_prev: Rod3DVelocity, v_after: Rod3DVelocity, impulse):
+    """The energy the implicit kick's numerical damping removes: its impulse P (`implicit_kick`
+    with `with_impulse`: −γ h H_d (hk v_{n−½} + h Δv) on the free degrees of freedom, H_d the shear
+    and twist stiffness) times the mean velocity ½(v_{n−½} + v_{n+½}), per node and component and
+    per segment and axis (`(n+1, 3)` and `(n, 3)` [J], as `energy.impulse_work`'s `lost`)."""
     dtype = v_prev.v.dtype
-    D, U = hessian_blocks(model, q.x, q.Q, damped=True)
-    free = _free(model, dtype)
 
     def blocks(u):
         return jnp.concatenate([u.v, jnp.concatenate([u.w, jnp.zeros((1, 3), dtype)])], -1)
 
-    before, trial, after = blocks(v_prev), blocks(v_trial), blocks(v_after)
-    impulse = -gamma * h * block_tridiagonal_matvec(D, U, free * (hk * before + h * (trial - before)))
-    lost = -free * impulse * 0.5 * (before + after)
+    lost = -impulse * 0.5 * (blocks(v_prev) + blocks(v_after))
     return lost[:, :3], lost[:-1, 3:]
