@@ -90,7 +90,7 @@ def test_the_element_hessians_are_the_potentials():
 def test_the_closed_form_stiffness_against_ad(turn, damped):
     """Stretch, shear and the wall exact; bend and twist Gauss–Newton: their blocks differ from
     the exact ones by about |ψ| (the turn of a joint) relative to the bending stiffness EI/l̂.
-    `damped`: the damping's matrix, shear and twist alone (no stretch, bend or wall in it)."""
+    `damped`: the damping's matrix, shear, bend and twist (no stretch or wall in it)."""
     model, x, Q = _bent_state(turn=turn)
     D, U = hessian_blocks(model, x, Q, damped=damped)
     Da, Ua = hessian_blocks_ad(model, x, Q, damped=damped)
@@ -224,8 +224,9 @@ def test_the_energy_balance_counts_the_damping_and_closes_at_second_order():
     γ's work counted in `dissipated` (`ImplicitLeapfrog.kick_loss`). The balance E + D − E(0) jumps
     in the first save interval — the start puts energy into the shear mode, which the trapezoidal
     rule aliases and γ then removes (measured 9.5 % then 2.4 % of the kinetic energy put in at
-    5e-5 and 2.5e-5 s: second order) — and then holds: without friction D stays where the start
-    left it and the balance moves by under 1 % of that kinetic energy over the run."""
+    5e-5 and 2.5e-5 s: second order) — and then holds: without friction γ goes on removing energy
+    from the bending motion (D grows by 10 % of the kinetic energy put in at 5e-5 s) while the
+    balance moves by under a tenth of that."""
     for mu in (0.0, 0.3):
         rod = jr.RodChannel.reference(mu)
         model = Rod3D(rod, 30, control="load", end_load=theory.reference_load(rod) + 5.0)
@@ -240,7 +241,7 @@ def test_the_energy_balance_counts_the_damping_and_closes_at_second_order():
             errs.append(np.max(np.abs(balance)))
             if mu == 0.0:
                 assert dissipated[1] > 0.01  # γ's loss is counted
-                assert np.ptp(dissipated[1:]) < 1e-3 * dissipated[1]
-                assert np.max(np.abs(balance[1:] - balance[1])) < 0.01
+                later = dissipated[-1] - dissipated[1]
+                assert later > 0.02 and np.max(np.abs(balance[1:] - balance[1])) < 0.1 * later
         assert errs[1] < errs[0] / 3.0, errs
         assert errs[1] < 0.04, errs

@@ -20,7 +20,7 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
     With β = ¼ (default) it is the trapezoidal rule on a linear system: stable at any step and,
     with γ = 0, without numerical dissipation; 0 < β < ¼ is stable up to a step 2/(ω_max √(1 − 4β));
     β = 0 is the explicit leapfrog. γ adds the numerical damping γ h H_d v, where H_d is the
-    model's choice of the stiffness that carries no answer (the 3D rod: shear and twist,
+    model's choice of the stiffness it damps (the 3D rod: shear, bend and twist, not stretch or the wall,
     `jaxrod.rod3d.hessian`): damping ratio γ h ω / 2 in such a mode of frequency ω. Without it
     the stiff modes that the friction pass excites at every stick–slip event keep their amplitude,
     aliased to the step's Nyquist frequency, and the friction pass reads them as slip (at 60

@@ -20,19 +20,19 @@ which for a linear system is x_{n+1} − 2xₙ + x_{n−1} = −h² M⁻¹K (β 
 without numerical dissipation (every mode keeps its amplitude; its frequency is lowered, by
 (ωh)²/12 relative for ωh ≪ 1, and the modes far above 1/h alias to ≈ π/h). The half kicks
 (the first step, the velocity at a save) are half of Δv: (h/2) (M + β h² H)⁻¹ F with the full
-step's matrix. With the numerical damping γ (stiffness-proportional, implicit), on the shear and
-twist strains only (H_d: the Hessian of their energies, `hessian_blocks(..., damped=True)`; the
-kick assembles β H + γ H_d in one pass, every piece being linear in the stiffnesses):
+step's matrix. With the numerical damping γ (stiffness-proportional, implicit), on the shear,
+bending and twist strains (H_d: the Hessian of their energies, `hessian_blocks(..., damped=True)`;
+the kick assembles β H + γ H_d in one pass, every piece being linear in the stiffnesses):
 
     (M + β h² H + γ h² H_d) Δv = h F(qₙ) − γ h² H_d v_{n−½},
 
-a damping ratio γhω/2 in a shear or twist mode of frequency ω: those stiff modes, which ωh ≫ 1
-aliases and the friction pass excites at every stick–slip event, are damped within a few steps.
-Bending, the wall and stretch carry the answers and are not damped: damping the whole H moved
-E4's ΔF* under a random position by +23 % (the wall and bending modes) and the lock-up scene's
-entry force by +2.8 % (stretch: the axial vibrations of stick–slip); damping shear and twist alone
-keeps both within 0.2 % of the explicit scheme on the lock-up gate (docs/rod3d.md, "The implicit
-step"). The gyroscopic couple ω × Jω, contact and viscous damping stay explicit. Held
+a damping ratio γhω/2 in a mode of frequency ω: the stiff shear and twist modes and the bending
+modes near the segment scale, which ωh ≫ 1 aliases and the friction pass excites at every
+stick–slip event, are damped within a few steps. Stretch and the wall are not damped: damping
+the whole H moved the lock-up scene's entry force by +2.8 % (stretch: the axial vibrations of
+stick–slip; the steady slide's force comes through the axial springs), and leaving bending out
+as well moved E3's v₀* at 500 segments and 1–2 N by −2.3 to −2.5 % (its segment-scale bending
+modes alias at 5e-5 s) (docs/rod3d.md, "The implicit step"). The gyroscopic couple ω × Jω, contact and viscous damping stay explicit. Held
 degrees of freedom are taken out of the system (their rows and columns), and the friction pass
 follows the kick as in the explicit scheme.
 """
@@ -113,14 +113,14 @@ def _pad(a, front: int, back: int):
     return jnp.pad(a, (front, back))
 
 
-ALL, DAMPED = (1.0, 1.0, 1.0, 1.0), (0.0, 1.0, 0.0, 1.0)  # weights of (stretch, shear, bend, twist)
+ALL, DAMPED = (1.0, 1.0, 1.0, 1.0), (0.0, 1.0, 1.0, 1.0)  # weights of (stretch, shear, bend, twist)
 
 
 def element_blocks(model, x, Q, weights=ALL):
     """The stiffness's pieces per segment and joint, as tuples of component arrays (`hessian_blocks`
     assembles them): Hee (n) [N/m], Hep (n) [N], Hpp (n) [N·m], and for the joints (n − 1) RᵀKR,
     K and KR [N·m]. Each piece is linear in the stiffnesses, so `weights` (of stretch, shear,
-    bend and twist: `ALL`, or `DAMPED`, shear and twist only) gives any combination of the
+    bend and twist: `ALL`, or `DAMPED`: shear, bend and twist) gives any combination of the
     energies' Hessians in one pass."""
     rod, l0 = model.rod, model.l0
     X = c3.unpack(x)
@@ -178,7 +178,7 @@ def hessian_blocks(model, x, Q, damped: bool = False):
     are |ψ| (the turn of one joint) relative to these. The Hertz wall: `_wall_blocks`. Checked
     against forward-over-reverse AD of the potential (`hessian_blocks_ad`). Computed on
     component arrays (one per entry, as the forces are: `jaxrod.rod3d.components`) and stacked
-    once. `damped`: the Hessian of the shear and twist energies alone (`DAMPED`)."""
+    once. `damped`: the Hessian of the shear, bend and twist energies alone (`DAMPED`)."""
     D, U = _assembled(model, x, Q, DAMPED if damped else ALL, 0.0 if damped else 1.0)
     return (jnp.stack([jnp.stack(row, -1) for row in D], -2), jnp.stack([jnp.stack(row, -1) for row in U], -2))
 
@@ -211,16 +211,17 @@ def hessian_blocks_ad(model, x, Q, damped: bool = False):
     """The exact Hessian of the potential in the blocks of `hessian_blocks`, by forward-over-
     reverse AD of each element's energy (the bend and twist terms that the Gauss–Newton blocks
     leave out included): the reference the tests hold `hessian_blocks` to; 5–20× slower.
-    `damped`: of the shear and twist energies alone."""
+    `damped`: of the energies `DAMPED` weights (no stretch, no wall)."""
     rod, n, l0 = model.rod, model.n, model.l0
     dtype = x.dtype
-    kGA = model.shear_coefficient * rod.GA
-    EA, EI = (0.0 * rod.EA, 0.0 * rod.EI) if damped else (rod.EA, rod.EI)
+    stretch, shear, bend, twist = DAMPED if damped else ALL
+    kGA = shear * model.shear_coefficient * rod.GA
+    EA, EI, GJ = stretch * rod.EA, bend * rod.EI, twist * rod.GJ
     zero3 = jnp.zeros((n, 3), dtype)
     zs = jnp.concatenate([x[:-1], zero3, x[1:]], -1)
     Hs = jax.vmap(jax.hessian(_segment_energy), in_axes=(0, 0, None, None, None))(zs, Q, kGA, EA, l0)
     zj = jnp.zeros((n - 1, 6), dtype)
-    Hb = jax.vmap(jax.hessian(_joint_energy), in_axes=(0, 0, 0, None, None, None))(zj, Q[:-1], Q[1:], EI, rod.GJ, l0)
+    Hb = jax.vmap(jax.hessian(_joint_energy), in_axes=(0, 0, 0, None, None, None))(zj, Q[:-1], Q[1:], EI, GJ, l0)
     D = jnp.zeros((n + 1, 6, 6), dtype)
     D = D.at[:-1, :6, :6].add(Hs[:, :6, :6])
     D = D.at[1:, :3, :3].add(Hs[:, 6:, 6:])
@@ -268,14 +269,14 @@ def _free(model, dtype):
 def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_impulse: bool = False):
     """The kick of `hk` [s] of the implicit leapfrog of step `h` [s] (module docstring):
     Δ = (M + β h² H(q) + γ h² H_d(q))⁻¹ (hk (f, τ − ω × Jω) − γ h hk H_d v) on the free degrees of
-    freedom (H_d: shear and twist only), in units scaled by M^{−½}. Held degrees of freedom keep their
+    freedom (H_d: shear, bend and twist), in units scaled by M^{−½}. Held degrees of freedom keep their
     prescribed values. A matrix that is not positive definite (a step far past what the
     compressed rod allows) gives a non-finite state, which the run reports. With `with_impulse`,
     also the damping's impulse P = −γ h H_d (hk v + h Δ) by blocks (n + 1, 6) [N·s, N·m·s]
     (`damping_loss`; zeros with γ = 0)."""
     dtype = v.v.dtype
     # β H + γ H_d in one pass (each piece is linear in the stiffnesses), H_d for the damping force
-    weights = ALL if not gamma else (beta, beta + gamma, beta, beta + gamma)
+    weights = ALL if not gamma else tuple(beta + gamma * d for d in DAMPED)
     D, U = _stacked(*_assembled(model, q.x, q.Q, weights, 1.0 if not gamma else beta))
     free = _free(model, dtype)
     s = free / jnp.sqrt(_block_masses(model, dtype))  # M^{-1/2} on the free unknowns, 0 elsewhere
@@ -287,7 +288,7 @@ def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_im
     rhs = hk * s * jnp.concatenate([a.f, torque], -1)
     A_D, A_U = c * Ds + jnp.eye(6, dtype=dtype)[None], c * Us
     vel = jnp.where(s > 0, jnp.concatenate([v.v, jnp.concatenate([v.w, jnp.zeros((1, 3), dtype)])], -1), 0.0)
-    if gamma:  # the damping γ h H_d v of the shear and twist strains, implicit (its matrix is in A)
+    if gamma:  # the damping γ h H_d v of the shear, bend and twist strains, implicit (its matrix is in A)
         Hd = _assembled(model, q.x, q.Q, DAMPED, 0.0)
         rhs = rhs - gamma * h * hk * s * _component_matvec(*Hd, vel)
     step = s * block_tridiagonal_solve(A_D, A_U, rhs)
