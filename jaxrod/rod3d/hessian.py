@@ -31,7 +31,7 @@ modes near the segment scale, which ωh ≫ 1 aliases and the friction pass exci
 stick–slip event, are damped within a few steps. Stretch and the wall are not damped: damping
 the whole H moved the lock-up scene's entry force by +2.8 % (stretch: the axial vibrations of
 stick–slip; the steady slide's force comes through the axial springs), and leaving bending out
-as well moved E3's v₀* at 500 segments and 1–2 N by −2.3 to −2.5 % (its segment-scale bending
+as well moved E3's v₀* at 500 segments and 1–2 N by −2.5 to −2.7 % (its segment-scale bending
 modes alias at 5e-5 s) (docs/rod3d.md, "The implicit step"). The gyroscopic couple ω × Jω, contact and viscous damping stay explicit. Held
 degrees of freedom are taken out of the system (their rows and columns), and the friction pass
 follows the kick as in the explicit scheme.
