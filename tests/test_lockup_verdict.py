@@ -97,3 +97,16 @@ def test_the_committed_runs_read_by_the_definition():
         assert _committed(name)["status"] == vd.TRANSIENT, name
     for name in ("muL1_far2.5_half_speed", "muL1_far2.5_long", "muL0.5_far4"):
         assert _committed(name)["status"] == vd.SLIDING, name
+
+
+def test_only_neighbours_on_the_wall_count_for_the_turn():
+    """A pinned end at the channel's axis has an angle that says nothing of a helix: with the
+    contact mask, a jump of π next to it does not make the run unresolved."""
+    n, l0, r = 20, 0.1, 0.04
+    theta = np.zeros((len(PUSH), n + 1))
+    theta[:, -1] = np.pi  # the end node, off the wall
+    contact = np.ones_like(theta, bool)
+    contact[:, -1] = False
+    f = np.full_like(PUSH, 3.0)
+    assert vd.verdict(PUSH, PUSH, f, theta, l0, r)["status"] == vd.UNRESOLVED
+    assert vd.verdict(PUSH, PUSH, f, theta, l0, r, contact=contact)["status"] == vd.SLIDING

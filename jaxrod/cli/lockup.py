@@ -31,14 +31,16 @@ def _cmd_lockup(args) -> int:
     r = inject(rod, args.far_load * F0, args.speed, duration, unload=args.unload, n=args.n, n_save=args.n_save,
                damping=args.damping, progress=not args.quiet, scheme=args.scheme)
     l0 = float(rod.L) / int(r["n"])
-    per_turn, angle = turn_resolution(r["theta"], l0, float(rod.R))
+    on_wall = r["wall_force"] > 0
+    per_turn, angle = turn_resolution(r["theta"], l0, float(rod.R), on_wall)
     rows = [dict(t=r["t"][k], push=r["push"][k], far_displacement=r["u"][k, 0], F_in=r["F_in"][k], f_in=r["f_in"][k],
                  F_far=r["F_far"][k], f_far=r["f_far"][k], helical_over_ell=r["helical"][k] / ell,
                  sinusoidal_over_ell=r["sinusoidal"][k] / ell, stuck_fraction=r["stuck_fraction"][k],
                  max_wall_force_over_w=float(np.max(r["wall_force"][k])) / w, segments_per_turn=per_turn[k],
                  helix_angle_deg=angle[k]) for k in range(len(r["t"]))]
     loading = r["phase"] == 0
-    told = verdict(r["push"][loading], r["u"][loading, 0], r["f_in"][loading], r["theta"][loading], l0, float(rod.R))
+    told = verdict(r["push"][loading], r["u"][loading, 0], r["f_in"][loading], r["theta"][loading], l0, float(rod.R),
+                   contact=on_wall[loading])
     tail = loading & (r["push"] >= 0.8 * float(np.max(r["push"][loading])))  # the last fifth of the push
     geometry = (float(rod.L), float(rod.EI), w, float(rod.R), args.mu)
     soft = {f"{onset} / {law}": float(chain.entry_force(args.far_load * F0, *geometry, helical_onset=onset,

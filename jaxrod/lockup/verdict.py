@@ -58,24 +58,30 @@ def _check(criterion: Criterion) -> None:
             raise ValueError(f"Criterion.{name} = {x!r} is invalid: expected a finite float > 0.")
 
 
-def turn_resolution(theta, l0: float, r: float):
+def turn_resolution(theta, l0: float, r: float, contact=None):
     """Per save, how well the rod's turn round the channel is resolved: the fewest segments per
     helical turn, 2π/max|Δθ|, and the largest helix angle, atan(r max|Δθ|/l̂) [deg], where Δθ is
     the change of the wall angle `theta` (saves, n + 1) [rad] from one node to the next (wrapped
-    to (−π, π]), `l0` the segment length [m] and `r` the clearance [m]. A straight or sinusoidal
-    rod (|Δθ| small) has many segments per turn."""
+    to (−π, π]), `l0` the segment length [m] and `r` the clearance [m]; with `contact` (saves,
+    n + 1, bool), only between neighbours that both touch the wall (the angle of a node off the
+    wall, a pinned end at the axis, says nothing of a helix). A straight or sinusoidal rod (|Δθ|
+    small) has many segments per turn."""
     theta = np.asarray(theta, float)
     d = np.angle(np.exp(1j * np.diff(theta, axis=-1)))
+    if contact is not None:
+        contact = np.asarray(contact, bool)
+        d = np.where(contact[..., 1:] & contact[..., :-1], d, 0.0)
     turn = np.max(np.abs(d), axis=-1)
     per_turn = np.where(turn > 0, 2 * np.pi / np.where(turn > 0, turn, 1.0), np.inf)
     return per_turn, np.degrees(np.arctan(r * turn / l0))
 
 
 def verdict(push, far, f_in, theta=None, l0: float | None = None, r: float | None = None,
-            criterion: Criterion = Criterion()) -> dict:
+            criterion: Criterion = Criterion(), contact=None) -> dict:
     """The status of an injection run's loading phase (module docstring) from its saves: `push`
     the entry's advance [m], `far` the far end's [m], `f_in` the entry force [F₀]; with `theta`
-    (saves, n + 1) [rad], `l0` and `r` [m], also its resolution (`turn_resolution`).
+    (saves, n + 1) [rad], `l0` and `r` [m] (and `contact`, as there), also its resolution
+    (`turn_resolution`).
 
     **Returns:** a dict: `status` (one of `SLIDING`, `LOCKED`, `TRANSIENT`, `UNRESOLVED`,
     `FAILED`), `reason` (one line), `transfer` (ρ over the last two parts), `force` (f̄ over them
@@ -88,7 +94,7 @@ def verdict(push, far, f_in, theta=None, l0: float | None = None, r: float | Non
                          f"records of at least {2 * criterion.windows} saves.")
     out = dict(transfer=None, force=None)
     if theta is not None:
-        per_turn, angle = turn_resolution(theta, l0, r)
+        per_turn, angle = turn_resolution(theta, l0, r, contact)
         bad = (per_turn < criterion.min_segments_per_turn) | (angle > criterion.max_helix_angle)
         out.update(segments_per_turn=float(np.min(per_turn)), helix_angle=float(np.max(angle)),
                    f_unresolved=float(f_in[np.argmax(bad)]) if bad.any() else None)
