@@ -76,7 +76,8 @@ def block_tridiagonal_solve(D: Float[Array, "nb m m"], U: Float[Array, "nb1 m m"
 
 def block_tridiagonal_matvec(D: Float[Array, "nb m m"], U: Float[Array, "nb1 m m"],
                              x: Float[Array, "nb m"]) -> Float[Array, "nb m"]:
-    """A x for the block-tridiagonal A of `block_tridiagonal_solve`."""
+    """A x for the block-tridiagonal A of `block_tridiagonal_solve` (its tests' reference; the 3D
+    rod's kick applies its stiffness on component arrays, `jaxrod.rod3d.hessian`)."""
     out = jnp.einsum("kij,kj->ki", D, x)
     out = out.at[:-1].add(jnp.einsum("kij,kj->ki", U, x[1:]))
     return out.at[1:].add(jnp.einsum("kji,kj->ki", U, x[:-1]))

@@ -179,8 +179,7 @@ def hessian_blocks(model, x, Q, damped: bool = False):
     against forward-over-reverse AD of the potential (`hessian_blocks_ad`). Computed on
     component arrays (one per entry, as the forces are: `jaxrod.rod3d.components`) and stacked
     once. `damped`: the Hessian of the shear, bend and twist energies alone (`DAMPED`)."""
-    D, U = _assembled(model, x, Q, DAMPED if damped else ALL, 0.0 if damped else 1.0)
-    return (jnp.stack([jnp.stack(row, -1) for row in D], -2), jnp.stack([jnp.stack(row, -1) for row in U], -2))
+    return _stacked(*_assembled(model, x, Q, DAMPED if damped else ALL, 0.0 if damped else 1.0))
 
 
 def _assembled(model, x, Q, weights=ALL, wall_weight=1.0):
@@ -236,6 +235,7 @@ def hessian_blocks_ad(model, x, Q, damped: bool = False):
 
 
 def _stacked(D, U):
+    """The 6×6 tuples of component arrays of `_assembled` as arrays (n + 1, 6, 6) and (n, 6, 6)."""
     return (jnp.stack([jnp.stack(row, -1) for row in D], -2), jnp.stack([jnp.stack(row, -1) for row in U], -2))
 
 
@@ -250,6 +250,11 @@ def _component_matvec(D, U, x):
         down = sum(U[b][a] * cols[b][:-1] for b in range(6))  # block (k + 1, k) = U_kᵀ
         out.append(own + jnp.pad(up, (0, 1)) + jnp.pad(down, (1, 0)))
     return jnp.stack(out, -1)
+
+
+def _blocks_of(u: Rod3DVelocity):
+    """A velocity by blocks (n + 1, 6): (vₖ, wₖ), the last block's spin a zero placeholder."""
+    return jnp.concatenate([u.v, jnp.concatenate([u.w, jnp.zeros((1, 3), u.w.dtype)])], -1)
 
 
 def _block_masses(model, dtype):
@@ -276,18 +281,17 @@ def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_im
     (`damping_loss`; zeros with γ = 0)."""
     dtype = v.v.dtype
     # β H + γ H_d in one pass (each piece is linear in the stiffnesses), H_d for the damping force
-    weights = ALL if not gamma else tuple(beta + gamma * d for d in DAMPED)
-    D, U = _stacked(*_assembled(model, q.x, q.Q, weights, 1.0 if not gamma else beta))
+    D, U = _stacked(*_assembled(model, q.x, q.Q, tuple(beta + gamma * d for d in DAMPED), beta))
     free = _free(model, dtype)
     s = free / jnp.sqrt(_block_masses(model, dtype))  # M^{-1/2} on the free unknowns, 0 elsewhere
     Ds = s[:, :, None] * D * s[:, None, :]
     Us = s[:-1, :, None] * U * s[1:, None, :]
-    c = (beta if not gamma else 1.0) * h * h
+    c = h * h
     gyro = c3.pack(c3.gyroscopic(c3.unpack(model.inertia), c3.unpack(v.w)))
     torque = jnp.concatenate([a.tau - gyro, jnp.zeros((1, 3), dtype)])
     rhs = hk * s * jnp.concatenate([a.f, torque], -1)
     A_D, A_U = c * Ds + jnp.eye(6, dtype=dtype)[None], c * Us
-    vel = jnp.where(s > 0, jnp.concatenate([v.v, jnp.concatenate([v.w, jnp.zeros((1, 3), dtype)])], -1), 0.0)
+    vel = jnp.where(s > 0, _blocks_of(v), 0.0)
     if gamma:  # the damping γ h H_d v of the shear, bend and twist strains, implicit (its matrix is in A)
         Hd = _assembled(model, q.x, q.Q, DAMPED, 0.0)
         rhs = rhs - gamma * h * hk * s * _component_matvec(*Hd, vel)
@@ -302,13 +306,8 @@ def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_im
 
 def damping_loss(model, v_prev: Rod3DVelocity, v_after: Rod3DVelocity, impulse):
     """The energy the implicit kick's numerical damping removes: its impulse P (`implicit_kick`
-    with `with_impulse`: −γ h H_d (hk v_{n−½} + h Δv) on the free degrees of freedom, H_d the shear
-    and twist stiffness) times the mean velocity ½(v_{n−½} + v_{n+½}), per node and component and
-    per segment and axis (`(n+1, 3)` and `(n, 3)` [J], as `energy.impulse_work`'s `lost`)."""
-    dtype = v_prev.v.dtype
-
-    def blocks(u):
-        return jnp.concatenate([u.v, jnp.concatenate([u.w, jnp.zeros((1, 3), dtype)])], -1)
-
-    lost = -impulse * 0.5 * (blocks(v_prev) + blocks(v_after))
+    with `with_impulse`: −γ h H_d (hk v_{n−½} + h Δv) on the free degrees of freedom, H_d the shear,
+    bend and twist stiffness) times the mean velocity ½(v_{n−½} + v_{n+½}), per node and component
+    and per segment and axis (`(n+1, 3)` and `(n, 3)` [J], as `energy.impulse_work`'s `lost`)."""
+    lost = -impulse * 0.5 * (_blocks_of(v_prev) + _blocks_of(v_after))
     return lost[:, :3], lost[:-1, 3:]
