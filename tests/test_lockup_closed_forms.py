@@ -197,6 +197,26 @@ def test_far_force_max_and_lockup_length_by_hand():
     assert fmax(X_lock * (1 + 1e-9)) == 0.0 and fmax(6.0) == 0.0
 
 
+@pytest.mark.parametrize("laws", [{}, dict(helical_law="without_weight"), dict(helical_onset="wu_juvkam_wold"),
+                                  dict(sinusoidal_law="half_helical")])
+def test_lockup_length_at_a_bounded_entry_force(laws):
+    """At a bounded entry force the lock-up length is where `far_force` of that force reaches 0
+    (found here by bisection on far_force, independently of the sum the code takes), and it
+    tends to the unbounded one as the force grows."""
+    for f in (1.5, 2.5, 3.2, 6.0, 20.0):
+        lo, hi = 0.0, 20.0
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            far = float(lk.far_force(f * F0, mid * ELL / MU, *ARGS, MU, **laws))
+            lo, hi = (mid, hi) if far > 1e-12 * F0 else (lo, mid)
+        got = float(lk.lockup_length(*ARGS, MU, F_in=f * F0, **laws)) * MU / ELL
+        assert got == pytest.approx(hi, rel=1e-9), f
+    big = float(lk.lockup_length(*ARGS, MU, F_in=1e9 * F0, **laws))
+    assert big == pytest.approx(float(lk.lockup_length(*ARGS, MU, **laws)), rel=1e-6 if laws.get("helical_law") else 1e-8)
+    straight = float(lk.lockup_length(*ARGS, MU, F_in=1.5 * F0, **laws)) * MU / ELL
+    assert straight == pytest.approx(1.5, rel=1e-12)  # below 2F0 the rod stays straight: X = f_in
+
+
 def test_lockup_length_variants_by_hand():
     # Wu & Juvkam-Wold onset, f_h = 2(2√2 − 1): 2(π/2 − arctan(f_h/2)) + (f_h − 2) + 2
     fh = 2 * (2 * math.sqrt(2) - 1)

@@ -1,177 +1,235 @@
-"""Lock-up (beyond the paper, docs/physics.md §8): the 3D rod injected into a long channel
-against a far load, for several μL/ℓ at once, beside the soft-string closed forms.
+"""Lock-up (beyond the paper, docs/physics.md §8): F_far,max and the lock-up length of the 3D
+rod, read by one definition at a bounded entry force, converged in segments and push speed,
+beside every soft-string variant read by the same definition.
 
-One geometry (r/ℓ = 0.02, the reference nitinol, L/ℓ fixed by the setting) and one vmapped run
-([`jaxrod.lockup.push.inject_lanes`][]): lane (μL/ℓ, f_far) has μ = (μL/ℓ)/(L/ℓ) and the far
-load f_far F₀, with f_far a fixed fraction of the largest soft-string F_far,max of the four
-variants at its μL/ℓ (the grid is set from the closed forms before any run, never from the
-3D results). From each lane: the steady entry force over the last fifth of the push, whether
-it locked up (`jaxrod.lockup.push.locked`), the helical and sinusoidal extents, and the entry
-force when a sinusoid and when a helix first appear. From the lanes together: F_far,max/F₀
-bracketed by the largest sliding and the smallest locked far load, and μL_lock/ℓ bracketed by
-the lanes without a far load.
+The definition (`jaxrod.lockup.staircase`): F_far,max(f_c) is the largest far load the rod
+pushes in a steady slide with an entry force of at most f_c F₀, an entry force the rod still
+resolves; μL_lock(f_c)/ℓ the μL/ℓ beyond which f_c F₀ pushes nothing to the far end. Each is
+bracketed by a staircase of steady injections, one lane per μL/ℓ. The closed forms read by the
+same definition are `chain.far_force(f_c F₀)` and `chain.lockup_length(F_in=f_c F₀)`; their
+unbounded F_far,max and L_lock are written beside them.
+
+Lanes that share a rod length form one vmapped staircase; a group (one rod length) at one
+setting of (segments per buckle wavelength, push speed) is one job, and the jobs run in worker
+processes, one per core. Each job writes its own JSON under `jobs/` as it finishes (a second run
+skips the jobs whose file is there with the same settings); `curve.csv`, `lockup_length.csv`,
+`stages.csv`, `profiles.csv`, `curve.json` and `curve.png` are written from them.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
+import time
 
 import numpy as np
 
-from ..output import subplots, write_csv
+from ..output import write_csv
 
-__all__ = ["lockup", "SIZES"]
+__all__ = ["lockup", "SETTINGS", "VARIANTS"]
 
-SPEED, DAMPING, PUSH_PER_LENGTH, R_OVER_ELL = 5e-3, 20.0, 0.075, 0.02
+DAMPING, R_OVER_ELL = 20.0, 0.02
 VARIANTS = [("chen", "with_weight"), ("chen", "without_weight"), ("wu_juvkam_wold", "with_weight"),
             ("wu_juvkam_wold", "without_weight")]
-SIZES = {
-    False: dict(L_over_ell=5.0, X=(0.5, 1.0, 2.0, 3.0, 4.0, 5.0), fractions=(0.0, 0.25, 0.5, 0.75, 1.0, 1.25),
-                n=None, push=PUSH_PER_LENGTH, n_save=201),
-    True: dict(L_over_ell=2.0, X=(0.5, 1.0, 2.0), fractions=(0.0, 0.5, 1.0, 1.25), n=None, push=PUSH_PER_LENGTH,
-               n_save=101),
-    "tiny": dict(L_over_ell=1.0, X=(0.5, 1.0), fractions=(0.0, 1.0), n=12, push=0.005, n_save=11),
+SETTINGS = {
+    # groups: (L/ℓ, far-load lanes' μL/ℓ, the lock-up lane's first μL/ℓ, "auto" or None);
+    # runs: (segments per buckle wavelength, push speed [m/s]) — the base, twice the segments, half the speed
+    False: dict(groups=((2.0, (0.5, 1.0, 1.5, 2.0), None), (4.0, (3.0, 4.0), "auto")), f_c=6.0,
+                runs=((16, 10e-3), (32, 10e-3), (16, 5e-3)), first_push=0.4, stage_push=0.15, max_stages=12,
+                saves_per_stage=41),
+    True: dict(groups=((2.0, (0.5, 1.0, 2.0), None),), f_c=6.0, runs=((16, 10e-3),), first_push=0.4,
+               stage_push=0.15, max_stages=8, saves_per_stage=41),
+    "tiny": dict(groups=((1.0, (0.5,), 0.5),), f_c=6.0, runs=((8, 10e-3),), first_push=0.004, stage_push=0.002,
+                 max_stages=2, saves_per_stage=11),
 }
 
 
-def _soft(rod, X, f):
-    """The soft string at μL/ℓ = X on the lane rod: F_far,max/F₀, μL_lock/ℓ and the entry force
-    for the far load f F₀, per variant."""
-    import jax.numpy as jnp
-
+def _closed(rod, X, f_c):
+    """Per variant: F_far at the entry force f_c and unbounded [F₀], and μL_lock/ℓ at f_c and
+    unbounded, on the lane rod at μL/ℓ = X."""
     from ..lockup import chain
     from ..lockup.push import units
 
     F0, ell = units(rod)
-    EI, w, r = float(rod.EI), float(rod.rho * rod.g), float(rod.R)
-    mu = X * ell / float(rod.L)
+    EI, w, r, L = float(rod.EI), float(rod.rho * rod.g), float(rod.R), float(rod.L)
+    mu = X * ell / L
     out = {}
     for onset, law in VARIANTS:
         kw = dict(helical_onset=onset, helical_law=law)
         out[f"{onset}/{law}"] = dict(
-            far_max=float(chain.far_force_max(rod.L, EI, w, r, mu, **kw)) / F0,
-            lock=float(chain.lockup_length(EI, w, r, mu, **kw)) * mu / ell,
-            entry=float(chain.entry_force(jnp.asarray(f * F0), rod.L, EI, w, r, mu, **kw)) / F0)
+            far_at_fc=float(chain.far_force(f_c * F0, L, EI, w, r, mu, **kw)) / F0,
+            far_max=float(chain.far_force_max(L, EI, w, r, mu, **kw)) / F0,
+            lock_at_fc=float(chain.lockup_length(EI, w, r, mu, F_in=f_c * F0, **kw)) * mu / ell,
+            lock=float(chain.lockup_length(EI, w, r, mu, **kw)) * mu / ell)
     return out
 
 
-def _first(extent, f_in):
-    i = np.flatnonzero(extent > 0)
-    return float(f_in[i[0]]) if i.size else math.nan
+def _job(args):
+    """One staircase: group (L/ℓ, Xs, lock X) at (segments per wave, speed). Runs in a worker."""
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from ..lockup.push import _wave, push_rod
+    from ..lockup.staircase import staircase
+
+    (Lx, Xs, X_lock0), (per_wave, speed), S, path, progress = args
+    rod = push_rod(Lx, R_OVER_ELL, 1.0)  # μ = 1 gives L = (L/ℓ) ℓ; each lane sets its own μ
+    n = max(8, math.ceil(per_wave * float(rod.L) / _wave(rod)))
+    mus = [X / Lx for X in Xs] + ([1.0] if X_lock0 is not None else [])
+    if X_lock0 not in (None, "auto"):
+        mus[-1] = X_lock0 / Lx
+    starts = [max(0.7 * min(v["far_at_fc"] for v in _closed(rod, X, S["f_c"]).values()), 0.1) for X in Xs]
+    starts += [0.0] if X_lock0 is not None else []
+    if X_lock0 is None:
+        pass
+    elif X_lock0 == "auto":  # 0.8 × the smallest soft-string μL_lock(f_c)/ℓ
+        X_lock0 = 0.8 * min(v["lock_at_fc"] for v in _closed(rod, 1.0, S["f_c"]).values())
+        mus[-1] = X_lock0 / Lx
+    vary = [False] * len(Xs) + ([True] if X_lock0 is not None else [])
+    t = time.time()
+    res = staircase(rod, mus, starts, speed, f_c=S["f_c"], vary_mu=vary, n=n, first_push=S["first_push"],
+                    stage_push=S["stage_push"], max_stages=S["max_stages"], saves_per_stage=S["saves_per_stage"],
+                    damping=DAMPING, progress=progress, label=f"{os.path.basename(path)[:-5]}: ")
+    lanes = []
+    for k, lane in enumerate(res["lanes"]):
+        prof = lane["profile"]
+        if prof is not None:
+            prof = {key: (np.asarray(a).tolist() if isinstance(a, np.ndarray) else a) for key, a in prof.items()}
+        lanes.append(dict(lane, X=float(mus[k] * Lx), vary_mu=bool(vary[k]), start=float(starts[k]), profile=prof))
+    out = dict(L_over_ell=Lx, per_wave=per_wave, speed=speed, n=int(res["n"]), dt=float(res["dt"]), f_c=S["f_c"],
+               F0=res["F0"], ell=res["ell"], l0=res["l0"], r=res["r"], EI=float(rod.EI), w=float(rod.rho * rod.g),
+               mu_of_X=1.0 / Lx, wall_s=time.time() - t, lanes=lanes, settings=S)
+    with open(path, "w") as fh:
+        json.dump(out, fh, indent=1, default=float)
+    return path
 
 
-def lockup(out, quick=False, progress=True) -> dict:
-    """Run the lanes of the setting `quick` (False: L/ℓ = 5, μL/ℓ 0.5–5, 36 lanes; True: L/ℓ = 2,
-    μL/ℓ 0.5–2, 12 lanes; "tiny": structure only) and write `lockup_lanes.csv` (one row per
-    lane), `lockup_runs.csv` (every lane's saves) and `lockup.png`."""
-    from ..lockup.push import inject_lanes, lane, locked, push_rod, units
+def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
+    """Run the setting `quick` (False: μL/ℓ 0.5–4 and the lock-up length, each at the base
+    resolution, twice the segments and half the speed; True: μL/ℓ 0.5, 1, 2 at the base;
+    "tiny": structure only) and write the files of the module docstring under `out`."""
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing as mp
 
-    S = SIZES[quick]
-    Lx = S["L_over_ell"]
-    rod = push_rod(Lx, R_OVER_ELL, 1.0)  # μ = 1 gives L = L/ℓ · ℓ; each lane sets its own μ
-    F0, ell = units(rod)
-    refs = {X: max(max(v["far_max"] for v in _soft(rod, X, 0.0).values()), 1.0) for X in S["X"]}
-    lanes = [(X, round(fr * refs[X], 6)) for X in S["X"] for fr in S["fractions"]]
-    mus = np.array([X / Lx for X, _ in lanes])
-    f_far = np.array([f for _, f in lanes])
-    push = S["push"] * float(rod.L)
+    S = SETTINGS[quick]
+    os.makedirs(os.path.join(out, "jobs"), exist_ok=True)
+    jobs = []
+    for g in S["groups"]:
+        for run in S["runs"]:
+            name = f"L{g[0]:g}_w{run[0]}_v{1e3 * run[1]:g}.json"
+            path = os.path.join(out, "jobs", name)
+            if os.path.exists(path) and json.load(open(path)).get("settings") == json.loads(json.dumps(S)):
+                continue
+            jobs.append(((g[0], g[1], g[2]), run, S, path, progress))
+    jobs.sort(key=lambda j: -len(j[0][1]) * j[0][0] * j[1][0] / j[1][1])  # the costliest first
+    workers = workers or min(len(jobs), os.cpu_count() or 1) or 1
+    t = time.time()
     if progress:
-        print(f"  lock-up: {len(lanes)} lanes, L = {float(rod.L):.3g} m ({Lx:g} ell), r = {1e3 * float(rod.R):.3g} mm, "
-              f"pushed {push:.3g} m at {1e3 * SPEED:g} mm/s", flush=True)
-    rec = inject_lanes(rod, mus, f_far * F0, SPEED, push / SPEED, n=S["n"], n_save=S["n_save"], damping=DAMPING,
-                       progress=progress)
-    w = float(rod.rho * rod.g)
-    rows, series = [], []
-    for k, (X, f) in enumerate(lanes):
-        one = lane(rec, k)
-        tail = one["push"] >= 0.8 * one["push"][-1]
-        adv_in = one["push"][tail][-1] - one["push"][tail][0]
-        adv_far = one["u"][tail, 0][-1] - one["u"][tail, 0][0]
-        soft = _soft(rod, X, f)
-        lk = locked(one)
-        row = dict(mu_L_over_ell=X, mu=float(mus[k]), far_load_over_F0=f, locked="" if lk is None else int(lk),
-                   held_from_s=float(one["held_from"]), result=int(one["result"]),
-                   entry_force_over_F0=float(np.mean(one["f_in"][tail])),
-                   entry_force_min_over_F0=float(np.min(one["f_in"][tail])),
-                   entry_force_max_over_F0=float(np.max(one["f_in"][tail])),
-                   far_over_entry_advance=float(adv_far / adv_in) if adv_in > 0 else math.nan,
-                   helical_over_ell=float(one["helical"][-1] / ell), sinusoidal_over_ell=float(one["sinusoidal"][-1] / ell),
-                   entry_force_at_first_sinusoid_over_F0=_first(one["sinusoidal"] + one["helical"], one["f_in"]),
-                   entry_force_at_first_helix_over_F0=_first(one["helical"], one["f_in"]),
-                   max_wall_force_over_w=float(np.max(one["wall_force"][-1]) / w))
-        row.update({f"soft_entry_{name}": v["entry"] for name, v in soft.items()})
-        rows.append(row)
-        series += [dict(lane=k, mu_L_over_ell=X, far_load_over_F0=f, t=one["t"][i], push=one["push"][i],
-                        far_displacement=one["u"][i, 0], f_in=one["f_in"][i], helical_over_ell=one["helical"][i] / ell,
-                        sinusoidal_over_ell=one["sinusoidal"][i] / ell) for i in range(len(one["t"]))]
-    write_csv(os.path.join(out, "lockup_lanes.csv"), rows)
-    write_csv(os.path.join(out, "lockup_runs.csv"), series)
-    res = dict(model="rod3d", n_segments=int(rec["n"]), scheme=rec["scheme"], dt=float(rec["dt"]), L_over_ell=Lx, r_over_ell=R_OVER_ELL,
-               L=float(rod.L), r=float(rod.R), F0=F0, ell=ell, speed=SPEED, damping=DAMPING, push=push, lanes=len(lanes),
-               cap_over_F0=ell / float(rod.R), cases={})
-    for X in S["X"]:
-        mine = [r for r in rows if r["mu_L_over_ell"] == X and r["locked"] != ""]
-        slides = [r["far_load_over_F0"] for r in mine if not r["locked"]]
-        locks = [r["far_load_over_F0"] for r in mine if r["locked"]]
-        soft = _soft(rod, X, 0.0)
-        res["cases"][f"{X:g}"] = dict(
-            far_max_3d_bracket=[max(slides) if slides else None, min(locks) if locks else None],
-            far_max_soft={name: v["far_max"] for name, v in soft.items()},
-            lockup_length_soft={name: v["lock"] for name, v in soft.items()})
-    free = [r for r in rows if r["far_load_over_F0"] == 0.0 and r["locked"] != ""]
-    res["lockup_length_3d_bracket"] = [max([r["mu_L_over_ell"] for r in free if not r["locked"]], default=None),
-                                       min([r["mu_L_over_ell"] for r in free if r["locked"]], default=None)]
-    _figure(out, rod, rows, res, S)
-    return res
+        print(f"  lock-up: {len(jobs)} staircase(s) to run on {workers} worker(s), f_c = {S['f_c']:g} F0", flush=True)
+    pool = None if len(jobs) <= 1 or workers == 1 else ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"))
+    try:
+        for path in (pool.map(_job, jobs) if pool else map(_job, jobs)):
+            if progress:
+                print(f"  {os.path.basename(path)} done after {time.time() - t:.0f} s", flush=True)
+    finally:
+        if pool:
+            pool.shutdown()
+    results = []
+    for g in S["groups"]:
+        for run in S["runs"]:
+            with open(os.path.join(out, "jobs", f"L{g[0]:g}_w{run[0]}_v{1e3 * run[1]:g}.json")) as fh:
+                results.append(json.load(fh))
+    return _write(out, S, results, time.time() - t)
 
 
-def _figure(out, rod, rows, res, S):
+def _write(out, S, results, wall):
+    from ..lockup.push import push_rod
+
+    curve, locks, stages, profiles = [], [], [], []
+    for res in results:
+        rod = push_rod(res["L_over_ell"], R_OVER_ELL, 1.0)
+        for lane in res["lanes"]:
+            worst = min([s["segments_per_turn"] for s in lane["stages"] if s["status"] == "sliding"], default=math.inf)
+            angle = max([s["helix_angle"] for s in lane["stages"] if s["status"] == "sliding"], default=0.0)
+            base = dict(n_segments=res["n"], push_speed=res["speed"], status=lane["status"], entry_force_bound=res["f_c"],
+                        L_over_ell=res["L_over_ell"], stages=len(lane["stages"]), segments_per_turn_sliding=worst,
+                        helix_angle_sliding_deg=angle)
+            lo = math.nan if lane["lo"] is None else lane["lo"]
+            hi = math.nan if lane["hi"] is None else lane["hi"]
+            if lane["vary_mu"]:
+                closed = _closed(rod, 1.0, res["f_c"])
+                locks.append(dict(base, muL_lock_lo=lo, muL_lock_hi=hi,
+                                  **{f"soft_{k}_at_fc": v["lock_at_fc"] for k, v in closed.items()},
+                                  **{f"soft_{k}_unbounded": v["lock"] for k, v in closed.items()}))
+            else:
+                closed = _closed(rod, lane["X"], res["f_c"])
+                curve.append(dict(muL_over_ell=lane["X"], n_segments=res["n"], push_speed=res["speed"], F_far_max_lo=lo,
+                                  F_far_max_hi=hi, status=lane["status"],
+                                  **{k: v for k, v in base.items() if k not in ("n_segments", "push_speed", "status")},
+                                  **{f"soft_{k}_at_fc": v["far_at_fc"] for k, v in closed.items()},
+                                  **{f"soft_{k}_unbounded": v["far_max"] for k, v in closed.items()}))
+            for s in lane["stages"]:
+                stages.append(dict(muL_over_ell=lane["X"], varies="mu" if lane["vary_mu"] else "far_load",
+                                   n_segments=res["n"], push_speed=res["speed"], **{k: v for k, v in s.items()}))
+            p = lane["profile"]
+            if p is not None:
+                for i, (th, N) in enumerate(zip(p["theta"], p["wall_force"])):
+                    F = p["axial_force"][min(i, len(p["axial_force"]) - 1)]
+                    profiles.append(dict(muL_over_ell=lane["X"], n_segments=res["n"], push_speed=res["speed"],
+                                         parameter=p["parameter"], node=i, s_from_far_end=i * res["l0"], theta=th,
+                                         wall_force=N, axial_force=F, mu=p["mu"], EI=res["EI"], w=res["w"], r=res["r"]))
+    write_csv(os.path.join(out, "curve.csv"), curve)
+    write_csv(os.path.join(out, "lockup_length.csv"), locks)
+    write_csv(os.path.join(out, "stages.csv"), stages)
+    write_csv(os.path.join(out, "profiles.csv"), profiles)
+    summary = dict(model="rod3d", scheme="implicit", r_over_ell=R_OVER_ELL, damping=DAMPING, f_c=S["f_c"],
+                   settings=S, wall_s_this_call=wall, jobs_wall_s=[r["wall_s"] for r in results],
+                   curve=curve, lockup_length=locks)
+    with open(os.path.join(out, "curve.json"), "w") as fh:
+        json.dump(summary, fh, indent=1, default=float)
+    _figure(out, S, curve, locks)
+    return summary
+
+
+def _figure(out, S, curve, locks):
     import jax.numpy as jnp
 
     from ..lockup import chain
-    from ..lockup.push import units
+    from ..lockup.push import push_rod, units
+    from ..output import subplots
 
+    rod = push_rod(4.0, R_OVER_ELL, 1.0)
     F0, ell = units(rod)
-    EI, w, r = float(rod.EI), float(rod.rho * rod.g), float(rod.R)
-    fig, (a, b) = subplots(1, 2, figsize=(11, 4.5))
-    colours = dict(zip(S["X"], ["C0", "C1", "C2", "C3", "C4", "C5"]))
-    for X in S["X"]:
-        mu = X * ell / float(rod.L)
-        f_in = np.geomspace(0.05, 60.0, 200)
-        for (onset, law), style in zip(VARIANTS[::2], ("-", "--")):
-            f_far = np.asarray(chain.far_force(jnp.asarray(f_in * F0), rod.L, EI, w, r, mu, helical_onset=onset,
-                                               helical_law=law)) / F0
-            a.plot(f_in, f_far, style, color=colours[X], lw=1)
-        mine = [q for q in rows if q["mu_L_over_ell"] == X]
-        for q in mine:
-            if q["locked"] == "":  # a failed lane: no point
-                continue
-            marker = "x" if q["locked"] else "o"
-            a.plot(q["entry_force_over_F0"] if not q["locked"] else 60.0, q["far_load_over_F0"], marker,
-                   color=colours[X], label=f"μL/ℓ = {X:g}" if q is mine[0] else None)
-    a.set_xscale("log")
-    a.set(xlabel="entry force / F₀ (last fifth of the push; x: locked)", ylabel="far load / F₀",
-          title="3D rod (points) and soft string (— Chen, -- Wu & Juvkam-Wold)")
-    a.legend(fontsize=8)
-    X = np.linspace(0.8 * min(S["X"]), 6.0, 300)
-    for onset, law in VARIANTS:
-        fm = [float(chain.far_force_max(rod.L, EI, w, r, x * ell / float(rod.L), helical_onset=onset,
-                                        helical_law=law)) / F0 for x in X]
-        b.plot(X, fm, lw=1, label=f"{onset.replace('_', ' ')}, {law.replace('_', ' ')}")
-    for key, c in res["cases"].items():
-        lo, hi = c["far_max_3d_bracket"]
-        x = float(key)
-        if lo is not None and hi is not None:
-            b.plot([x, x], [lo, hi], "k-", lw=3)
-        elif lo is not None:
-            b.plot(x, lo, "k^")
-        elif hi is not None:
-            b.plot(x, hi, "kv")
-    b.plot([], [], "k-", lw=3, label="3D rod: largest sliding – smallest locked")
-    top = max([v for c in res["cases"].values() for v in c["far_max_3d_bracket"] if v is not None]
-              + [v for c in res["cases"].values() for v in c["far_max_soft"].values()])
-    b.set(xlabel="μL/ℓ", ylabel="F_far,max / F₀", ylim=(0, 1.2 * top), title="largest force reaching the far end")
-    b.legend(fontsize=7)
+    EI, w, r, L = float(rod.EI), float(rod.rho * rod.g), float(rod.R), float(rod.L)
+    fig, ax = subplots(1, 1, figsize=(7.5, 5))
+    X = np.linspace(0.3, 5.0, 300)
+    for (onset, law), c in zip(VARIANTS, ("C0", "C1", "C2", "C3")):
+        kw = dict(helical_onset=onset, helical_law=law)
+        mu = jnp.asarray(X * ell / L)
+        at = np.asarray(chain.far_force(S["f_c"] * F0, L, EI, w, r, mu, **kw)) / F0
+        lim = np.asarray(chain.far_force_max(L, EI, w, r, mu, **kw)) / F0
+        name = f"{onset.replace('_', ' ')}, {law.replace('_', ' ')}"
+        ax.plot(X, at, "-", color=c, lw=1.2, label=f"{name}: at f_in = {S['f_c']:g}")
+        ax.plot(X, lim, ":", color=c, lw=1, label=f"{name}: f_in → ∞")
+    marks = {}
+    for row in curve:
+        key = (row["n_segments"] / row["L_over_ell"], row["push_speed"])
+        style = marks.setdefault(key, ("k", "C4", "C5", "C6")[len(marks) % 4])
+        dx = 0.04 * (list(marks).index(key) - 1)
+        lo, hi = row["F_far_max_lo"], row["F_far_max_hi"]
+        if np.isfinite(lo) and np.isfinite(hi):
+            ax.plot([row["muL_over_ell"] + dx] * 2, [lo, hi], "-", color=style, lw=4)
+        elif np.isfinite(lo):
+            ax.plot(row["muL_over_ell"] + dx, lo, "^", color=style)
+    for key, style in marks.items():
+        ax.plot([], [], "-", color=style, lw=4, label=f"3D rod, {key[0]:.1f} seg/ℓ, {1e3 * key[1]:g} mm/s")
+    for row in locks:
+        lo, hi = row["muL_lock_lo"], row["muL_lock_hi"]
+        if np.isfinite(lo) and np.isfinite(hi):
+            ax.plot([lo, hi], [0, 0], "-", color="k", lw=6, alpha=0.5)
+    ax.set(xlabel="μL/ℓ", ylabel="F_far,max / F₀", ylim=(0, 10),
+           title=f"largest far load pushed at an entry force ≤ {S['f_c']:g} F₀ (bars: 3D rod's brackets)")
+    ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "lockup.png"), dpi=130)
+    fig.savefig(os.path.join(out, "curve.png"), dpi=130)

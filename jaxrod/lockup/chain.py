@@ -148,7 +148,7 @@ def far_force_max(L: ArrayLike, EI: ArrayLike, w: ArrayLike, r: ArrayLike, mu: A
     return far_force(jnp.inf, L, EI, w, r, mu, **laws)
 
 
-def lockup_length(EI: ArrayLike, w: ArrayLike, r: ArrayLike, mu: ArrayLike, *,
+def lockup_length(EI: ArrayLike, w: ArrayLike, r: ArrayLike, mu: ArrayLike, *, F_in: ArrayLike | None = None,
                   helical_onset: str = "chen", sinusoidal_law: str = "weight",
                   helical_law: str = "with_weight") -> Float[Array, "..."]:
     """The lock-up length L_lock [m] of the chained model (P15): beyond it no force reaches the
@@ -157,13 +157,23 @@ def lockup_length(EI: ArrayLike, w: ArrayLike, r: ArrayLike, mu: ArrayLike, *,
     onset f_h (2(π/2 − arctan(f_h/2)) with the weight term, 4/f_h without), the sinusoidal one
     from f_h to 2, and 2 for the straight one. 4.059 ℓ/μ with the default laws; inf at μ = 0.
 
+    With `F_in` [N], the entry force is bounded: the length beyond which `F_in` pushes nothing to
+    the far end (the same sum from f_in = F_in/F₀ down; `far_force(F_in, L)` is 0 from it on),
+    the closed forms' counterpart of a rod run that resolves entry forces up to `F_in` only
+    (`jaxrod.lockup.staircase`).
+
     **Raises:** `ValueError` naming the argument for concrete invalid input or an unknown choice.
     """
     fh, fs, sin, hel = _laws(helical_onset, sinusoidal_law, helical_law)
     EI, w, r = _rod(EI, w, r)
     mu = _check("mu", mu, "")
     ell = jnp.sqrt(EI / (r * w))
-    X = transfer_length(jnp.inf, fh, *hel) + transfer_length(fh, fs, *sin) + fs
+    if F_in is None:
+        X = transfer_length(jnp.inf, fh, *hel) + transfer_length(fh, fs, *sin) + fs
+    else:
+        f = _check("F_in", F_in, "N") / jnp.sqrt(EI * w / r)
+        X = (_transfer_length(jnp.maximum(f, fh), fh, *hel) + _transfer_length(jnp.clip(f, fs, fh), fs, *sin)
+             + jnp.minimum(f, fs))
     return X * ell / mu
 
 
