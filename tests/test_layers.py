@@ -15,7 +15,7 @@ LAYERS = [
     ["models", "rod3d.so3", "rod3d.model", "rod3d"],
     ["integrators"],
     ["perturbations", "simulate"],
-    ["scene", "lockup.push"],
+    ["scene", "lockup.push", "lockup.staircase"],
     ["sweeps", "boundary", "model_choice"],
     ["stability_map", "worst_case", "figures"],
     ["experiments", "reproduce"],

@@ -25,7 +25,7 @@ def test_every_experiment_writes_figures_data_and_numbers(results):
               "e5/e5_modes.png", "e5/e5_modes.csv", "e6/e6_spectra.png", "e6/e6_spectra.csv",
               "e1/e1_force_displacement.png", "e1/e1_force_displacement.csv", "e1/e1_speed.png", "e1/e1_speed.csv", "e6/e6_full_model.png",
               "e6/e6_full_model.csv", "helix/helix_post_buckling.png", "helix/helix_post_buckling.csv",
-              "lockup/lockup.png", "lockup/lockup_lanes.csv", "lockup/lockup_runs.csv"):
+              "lockup/curve.png", "lockup/curve.csv", "lockup/lockup_length.csv", "lockup/stages.csv", "lockup/curve.json"):
         assert (out / f).stat().st_size > 0, f
 
 
@@ -93,16 +93,21 @@ def test_post_buckling_cycle_closes_its_energy_balance(results):
 
 
 @pytest.mark.slow
-def test_lockup_lanes_carry_the_soft_string_beside_them(results):
-    """The lock-up experiment (tiny: 2 μL/ℓ × 2 far loads): every lane ran, and the soft string's
-    F_far,max falls with μL/ℓ for every variant while its lock-up length does not depend on it."""
+def test_lockup_curve_carries_every_variant_beside_the_rod(results):
+    """The lock-up experiment (tiny: one μL/ℓ and the lock-up lane, two short stages): every
+    row of the curve has the columns the README names and the soft string's values at the entry
+    force bound, each below its unbounded one; its lock-up length at the bound is below the
+    unbounded one for every variant."""
     _, res = results
     lk = res["lockup"]
-    assert lk["lanes"] == 4 and lk["model"] == "rod3d"
-    a, b = lk["cases"]["0.5"], lk["cases"]["1"]
-    for name, v in a["far_max_soft"].items():
-        assert v > b["far_max_soft"][name] > 0, name
-        assert math.isclose(a["lockup_length_soft"][name], b["lockup_length_soft"][name], rel_tol=1e-12), name
+    assert lk["model"] == "rod3d" and len(lk["curve"]) == 1 and len(lk["lockup_length"]) == 1
+    row = lk["curve"][0]
+    for col in ("muL_over_ell", "n_segments", "push_speed", "F_far_max_lo", "F_far_max_hi", "status"):
+        assert col in row, col
+    for onset, law in (("chen", "with_weight"), ("wu_juvkam_wold", "without_weight")):
+        assert 0 < row[f"soft_{onset}/{law}_at_fc"] < row[f"soft_{onset}/{law}_unbounded"]
+        lock = lk["lockup_length"][0]
+        assert 0 < lock[f"soft_{onset}/{law}_at_fc"] < lock[f"soft_{onset}/{law}_unbounded"]
 
 
 def test_quick_reproduction_of_e2_and_e3(tmp_path):

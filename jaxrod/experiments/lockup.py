@@ -13,7 +13,10 @@ Lanes that share a rod length form one vmapped staircase; a group (one rod lengt
 setting of (segments per buckle wavelength, push speed) is one job, and the jobs run in worker
 processes, one per core. Each job writes its own JSON under `jobs/` as it finishes (a second run
 skips the jobs whose file is there with the same settings); `curve.csv`, `lockup_length.csv`,
-`stages.csv`, `profiles.csv`, `curve.json` and `curve.png` are written from them.
+`stages.csv`, `profiles.csv` (the last steady stage's wall angle, wall force and axial force
+along the rod), `helix_laws.csv` (those profiles against Lubinski, Mitchell and the soft string,
+`jaxrod.lockup.laws`), `onsets.csv` (the sinusoidal and helical onsets bracketed by the steady
+stages), `curve.json` and `curve.png` are written from them.
 """
 
 from __future__ import annotations
@@ -93,10 +96,9 @@ def _job(args):
                     damping=DAMPING, progress=progress, label=f"{os.path.basename(path)[:-5]}: ")
     lanes = []
     for k, lane in enumerate(res["lanes"]):
-        prof = lane["profile"]
-        if prof is not None:
-            prof = {key: (np.asarray(a).tolist() if isinstance(a, np.ndarray) else a) for key, a in prof.items()}
-        lanes.append(dict(lane, X=float(mus[k] * Lx), vary_mu=bool(vary[k]), start=float(starts[k]), profile=prof))
+        profs = [{key: (np.asarray(a).tolist() if isinstance(a, np.ndarray) else a) for key, a in prof.items()}
+                 for prof in lane["profiles"]]
+        lanes.append(dict(lane, X=float(mus[k] * Lx), vary_mu=bool(vary[k]), start=float(starts[k]), profiles=profs))
     out = dict(L_over_ell=Lx, per_wave=per_wave, speed=speed, n=int(res["n"]), dt=float(res["dt"]), f_c=S["f_c"],
                F0=res["F0"], ell=res["ell"], l0=res["l0"], r=res["r"], EI=float(rod.EI), w=float(rod.rho * rod.g),
                mu_of_X=1.0 / Lx, wall_s=time.time() - t, lanes=lanes, settings=S)
@@ -146,7 +148,9 @@ def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
 def _write(out, S, results, wall):
     from ..lockup.push import push_rod
 
-    curve, locks, stages, profiles = [], [], [], []
+    from ..lockup.laws import helix_against_laws
+
+    curve, locks, stages, profiles, laws = [], [], [], [], []
     for res in results:
         rod = push_rod(res["L_over_ell"], R_OVER_ELL, 1.0)
         for lane in res["lanes"]:
@@ -172,24 +176,58 @@ def _write(out, S, results, wall):
             for s in lane["stages"]:
                 stages.append(dict(muL_over_ell=lane["X"], varies="mu" if lane["vary_mu"] else "far_load",
                                    n_segments=res["n"], push_speed=res["speed"], **{k: v for k, v in s.items()}))
-            p = lane["profile"]
+            wave = 2 * math.pi * math.sqrt(res["ell"] * res["r"])
+            for p in lane["profiles"]:
+                hx = helix_against_laws(p["theta"], p["wall_force"], p["axial_force"], res["l0"], res["EI"], res["w"],
+                                        res["r"], p["mu"], wave)
+                laws.append(dict(muL_over_ell=lane["X"], varies="mu" if lane["vary_mu"] else "far_load",
+                                 n_segments=res["n"], push_speed=res["speed"], parameter=p["parameter"],
+                                 entry_force_over_F0=p["f_in"], helical_compared_over_ell=hx["inner_length"] / res["ell"],
+                                 F_lo_over_F0=hx["F_range"][0] / res["F0"], F_hi_over_F0=hx["F_range"][1] / res["F0"],
+                                 pitch_over_lubinski=hx["pitch_ratio"], N_over_mitchell=hx["N_ratio"],
+                                 N_over_mitchell_plus_w=hx["N_ratio_with_weight"],
+                                 dF_ds_over_mu_N=hx["soft_string_ratio"]))
+            p = lane["profiles"][-1] if lane["profiles"] else None
             if p is not None:
                 for i, (th, N) in enumerate(zip(p["theta"], p["wall_force"])):
                     F = p["axial_force"][min(i, len(p["axial_force"]) - 1)]
                     profiles.append(dict(muL_over_ell=lane["X"], n_segments=res["n"], push_speed=res["speed"],
                                          parameter=p["parameter"], node=i, s_from_far_end=i * res["l0"], theta=th,
                                          wall_force=N, axial_force=F, mu=p["mu"], EI=res["EI"], w=res["w"], r=res["r"]))
+    onsets = _onsets(results)
+    write_csv(os.path.join(out, "onsets.csv"), onsets)
     write_csv(os.path.join(out, "curve.csv"), curve)
     write_csv(os.path.join(out, "lockup_length.csv"), locks)
     write_csv(os.path.join(out, "stages.csv"), stages)
     write_csv(os.path.join(out, "profiles.csv"), profiles)
+    write_csv(os.path.join(out, "helix_laws.csv"), laws)
     summary = dict(model="rod3d", scheme="implicit", r_over_ell=R_OVER_ELL, damping=DAMPING, f_c=S["f_c"],
                    settings=S, wall_s_this_call=wall, jobs_wall_s=[r["wall_s"] for r in results],
-                   curve=curve, lockup_length=locks)
+                   curve=curve, lockup_length=locks, helix_laws=laws, onsets=onsets)
     with open(os.path.join(out, "curve.json"), "w") as fh:
         json.dump(summary, fh, indent=1, default=float)
     _figure(out, S, curve, locks)
     return summary
+
+
+def _onsets(results):
+    """Per setting (segments per wave, speed): the sinusoidal and helical onsets bracketed by the
+    steady stages — the largest steady entry force [F₀] without a sinusoid (a helix) at the end
+    of the stage and the smallest with one (`push.extents`: a helix shorter than about one buckle
+    wavelength is not told from a sinusoid, so the helical bracket is that of a helix at least
+    that long)."""
+    rows = []
+    for per_wave, speed in sorted({(r["per_wave"], r["speed"]) for r in results}, key=lambda k: (k[0], -k[1])):
+        pts = [(s["f_in"], s["sinusoidal"] + s["helical"], s["helical"])
+               for r in results if (r["per_wave"], r["speed"]) == (per_wave, speed)
+               for lane in r["lanes"] for s in lane["stages"] if s["status"] == "sliding"]
+        row = dict(segments_per_wave=per_wave, push_speed=speed, steady_stages=len(pts))
+        for name, col in (("sinusoidal", 1), ("helical", 2)):
+            row[f"{name}_onset_lo"] = max([p[0] for p in pts if p[col] == 0], default=math.nan)
+            row[f"{name}_onset_hi"] = min([p[0] for p in pts if p[col] > 0], default=math.nan)
+            row[f"{name}_inconsistent"] = sum(1 for p in pts if p[col] == 0 and p[0] > row[f"{name}_onset_hi"])
+        rows.append(row)
+    return rows
 
 
 def _figure(out, S, curve, locks):

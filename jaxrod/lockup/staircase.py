@@ -45,7 +45,7 @@ import numpy as np
 
 from ..integrators.base import RunOptions
 from ..rod3d import Rod3D
-from .push import _check, _run_lanes, _start, units
+from .push import _check, _run_lanes, _start, _wave, extents, units
 from .verdict import LOCKED, SLIDING, TRANSIENT, Criterion, verdict
 
 __all__ = ["staircase", "BRACKETED", "WIDE", "BELOW_START"]
@@ -87,10 +87,11 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     **Returns:** a dict: `lanes`, a list of one dict per lane — `status` (`BRACKETED`, `WIDE`,
     `BELOW_START`, or the verdict status that stopped it: transient, unresolved, failed; or
     `"open"` if the stages ran out), `lo`, `hi` (the bracket of the varied parameter: far load
-    [F₀] or μL/ℓ; None where not found), `stages` (per stage: the parameter, the verdict and
-    the entry force over the last part), `profile` (the last sliding stage's last save: `theta`
-    [rad], `wall_force` [N/m] at the nodes, `axial_force` [N] per segment, `f_in`, and the
-    parameter); and the run's `F0` [N], `ell` [m], `n`, `dt` [s], `l0` [m], `r` [m], `L_over_ell`."""
+    [F₀] or μL/ℓ; None where not found), `stages` (per stage: the parameter, the verdict, the
+    entry force over the last part [F₀], the worst segments per turn and helix angle [deg], the
+    helical and sinusoidal extents at the last save [m], `push.extents`), `profiles` (per
+    sliding stage at or below f_c, its last save: `theta` [rad], `wall_force` [N/m] at the nodes,
+    `axial_force` [N] per segment, `f_in` [F₀], `mu` and the parameter); and the run's `F0` [N], `ell` [m], `n`, `dt` [s], `l0` [m], `r` [m], `L_over_ell`."""
     speed = _check("speed", speed, 0.0, False, " m/s")
     f_c = _check("f_c", f_c, 0.0, False, " F0")
     rel = _check("rel", rel, 0.0, False)
@@ -105,6 +106,7 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     F0, ell = units(rod)
     L, r = float(rod.L), float(rod.R)
     l0 = L / n
+    s_nodes, wave = np.arange(n + 1) * l0, _wave(rod)
     X_of = lambda mu: mu * L / ell  # noqa: E731
 
     def model(mu, F):
@@ -113,7 +115,7 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
 
     mu_now, far_now = mus.copy(), far_loads.copy()
     pushing = np.ones(mus.shape, bool)
-    lanes = [dict(status="open", lo=None, hi=None, stages=[], profile=None, steady=[], repeats=0)
+    lanes = [dict(status="open", lo=None, hi=None, stages=[], profiles=[], steady=[], repeats=0)
              for _ in range(mus.size)]
     opts = RunOptions(stop_on_buckle=False, stop_when_stuck=False, save_state=True, progress=False)
     q, v = jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (mus.size,) + a.shape), (q0, v0))
@@ -141,15 +143,16 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
             V = verdict(x0[-1] - xs[k, :, -1], x0[0] - xs[k, :, 0], f_in, obs["theta"][k], l0, r, criterion,
                         contact=obs["normal_force"][k] > 0)
             f_bar = V["force"][1] if V["force"] else math.nan
+            hel, sin = extents(obs["theta"][k, -1][None], s_nodes, wave)
             lane["stages"].append(dict(stage=stage, parameter=p, status=V["status"], f_in=f_bar,
                                        segments_per_turn=V["segments_per_turn"], helix_angle=V["helix_angle"],
-                                       reason=V["reason"]))
+                                       helical=float(hel[0]), sinusoidal=float(sin[0]), reason=V["reason"]))
             if V["status"] == SLIDING and f_bar <= f_c:
                 lane.update(lo=p, repeats=0)
                 lane["steady"].append((p, f_bar))
-                lane["profile"] = dict(parameter=p, f_in=float(f_in[-1]), theta=obs["theta"][k, -1],
-                                       wall_force=obs["normal_force"][k, -1], axial_force=obs["axial_force"][k, -1],
-                                       mu=float(mu_now[k]))
+                lane["profiles"].append(dict(parameter=p, f_in=float(f_in[-1]), theta=obs["theta"][k, -1],
+                                             wall_force=obs["normal_force"][k, -1],
+                                             axial_force=obs["axial_force"][k, -1], mu=float(mu_now[k])))
                 nxt = _next(lane["steady"], p, f_c, rel)
                 if vary_mu[k]:
                     mu_now[k] = nxt * ell / L

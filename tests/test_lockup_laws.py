@@ -1,0 +1,53 @@
+"""The helix of a saved rod against the laws (`jaxrod.lockup.laws`), on helices built from the
+laws themselves: a rod sliding toward its far end whose force rises by the soft string's
+dF/ds = μN with Mitchell's N = r F²/(4EI) + w cos θ and Lubinski's turn rate √(F/(2EI)) reads
+every ratio as 1; a helix turned 10 % tighter, or with twice the wall force, reads so."""
+
+import math
+
+import numpy as np
+import pytest
+
+from jaxrod.lockup.laws import helix_against_laws
+
+EI, w, r, mu = 0.05, 0.8, 0.04, 0.2
+F0 = math.sqrt(EI * w / r)
+ell = math.sqrt(EI / (r * w))
+wave = 2 * math.pi * math.sqrt(ell * r)
+
+
+def _helix(n=600, L=2.5, f_far=4.0, tight=1.0, wall=1.0):
+    """A helix without the weight term in its transfer law: F(s) = F_far/(1 − μ r F_far s/(4EI))."""
+    s = np.linspace(0.0, L, n + 1)
+    F = f_far * F0 / (1 - mu * r * f_far * F0 * s / (4 * EI))
+    k = tight * np.sqrt(F / (2 * EI))
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (k[1:] + k[:-1]) * np.diff(s))])
+    N = wall * r * F**2 / (4 * EI) + w * np.cos(theta)
+    Fseg = 0.5 * (F[1:] + F[:-1])
+    return np.angle(np.exp(1j * theta)), N, Fseg, L / n
+
+
+def test_a_helix_built_from_the_laws_reads_one_on_every_law():
+    theta, N, Fseg, l0 = _helix()
+    got = helix_against_laws(theta, N, Fseg, l0, EI, w, r, mu, wave)
+    assert got["inner"].sum() > 100 and got["inner_length"] > 1.0
+    assert got["pitch_ratio"] == pytest.approx(1.0, abs=0.01)
+    assert got["N_ratio"] == pytest.approx(1.0, abs=0.02)  # w cos θ averages out over a turn
+    assert got["N_ratio_with_weight"] < got["N_ratio"] - 0.05
+    assert got["soft_string_ratio"] == pytest.approx(1.0, abs=0.03)
+
+
+def test_a_tighter_helix_and_a_harder_wall_are_read_as_such():
+    theta, N, Fseg, l0 = _helix(tight=1.1, wall=2.0)
+    got = helix_against_laws(theta, N, Fseg, l0, EI, w, r, mu, wave)
+    assert got["pitch_ratio"] == pytest.approx(1 / 1.1, abs=0.01)
+    assert got["N_ratio"] == pytest.approx(2.0, abs=0.04)
+    assert got["soft_string_ratio"] == pytest.approx(0.5, abs=0.03)  # F rises by μN with half this N
+
+
+def test_a_straight_rod_has_no_helix_to_compare():
+    n = 100
+    got = helix_against_laws(np.zeros(n + 1), np.full(n + 1, w), np.full(n, F0), 0.04, EI, w, r, mu, wave)
+    assert not got["helical"].any() and math.isnan(got["N_ratio"]) and got["inner_length"] == 0.0
+    with pytest.raises(ValueError, match="theta"):
+        helix_against_laws(np.zeros(n), np.full(n + 1, w), np.full(n, F0), 0.04, EI, w, r, mu, wave)
