@@ -70,7 +70,7 @@ def stability_map(
     model: str = "field",
     n: int | None = None,
     mode: int = 6,
-    out: str | None = "results/map",
+    out: str | None = "out/map",
     progress: bool = True,
     t1: float = 2.0,
     curve_rtol: float | None = 1e-3,

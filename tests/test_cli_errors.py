@@ -108,7 +108,7 @@ def _one_line_error(capsys, argv, option):
 @pytest.mark.parametrize("argv, option", CASES, ids=[" ".join(a) or "(none)" for a, _ in CASES])
 def test_error_is_one_line_naming_the_option_before_any_work(argv, option, tmp_path, monkeypatch, capsys,
                                                             compilations):
-    monkeypatch.chdir(tmp_path)  # a default output folder (results/...) would land here
+    monkeypatch.chdir(tmp_path)  # a default output folder (out/...) would land here
     (tmp_path / "afile").write_text("")
     before = sorted(tmp_path.rglob("*"))
     argv = [a.format(tmp=tmp_path, file=tmp_path / "afile") for a in argv]

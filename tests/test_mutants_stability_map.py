@@ -323,12 +323,13 @@ def test_a_galerkin_map_searches_its_boundary_with_its_own_settings(monkeypatch)
     assert s["n"] == 8 and s["maps"]["0.25"]["curve_v0"] == [1e-2, 1e-3] and "curve_v0" not in s["maps"]["0"]
 
 
-def test_a_map_writes_to_results_map_by_default(tmp_path, monkeypatch):
-    """Without `out` the files go to results/map under the working folder (as `jaxrod map`)."""
+def test_a_map_writes_to_out_map_by_default(tmp_path, monkeypatch):
+    """Without `out` the files go to out/map under the working folder (as `jaxrod map`), never
+    into the committed results/."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(sm, "plot_maps", lambda results, summary, path: None)
     sm.stability_map(mus=(0.3,), dF=[1.0], v0=[0.1], model="mode", progress=False, t1=0.2)
-    assert (tmp_path / "results" / "map" / "map.json").exists() and (tmp_path / "results" / "map" / "map.csv").exists()
+    assert (tmp_path / "out" / "map" / "map.json").exists() and (tmp_path / "out" / "map" / "map.csv").exists()
 
 
 def test_buckles_for_every_positive_load_looks_at_every_positive_load():

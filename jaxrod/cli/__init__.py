@@ -80,7 +80,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
     mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
-    mp.add_argument("--out", default="results/map", help="output folder (default results/map)")
+    mp.add_argument("--out", default="out/map", help="output folder (default: out/map under the working folder)")
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
     mp.add_argument("--no-curve", dest="no_curve", action="store_true",
                     help="do not search the boundary at every load (drawn over the grid, rtol 1e-3)")
@@ -124,7 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
     rp = sub.add_parser("reproduce", help="reproduce the paper's experiments E1-E6 (E1 and E6's full-model part with the 3D rod) "
                         "and the post-buckling helix/hysteresis experiment ('all'); lock-up by name")
     rp.add_argument("which", nargs="+", choices=["e1", "e2", "e3", "e4", "e5", "e6", "helix", "lockup", "all"])
-    rp.add_argument("--out", default="results/paper")
+    rp.add_argument("--out", default="out/paper", help="output folder (default: out/paper under the working folder; "
+                    "the committed reproduction is results/paper)")
     rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
     rp.add_argument("--model", choices=["field", "rod3d"], default="field",
                     help="rod3d: E3, E4, E5 and E6C with the 3D rod "
@@ -149,14 +150,14 @@ def build_parser() -> argparse.ArgumentParser:
                     help="time stepping: the implicit leapfrog at its own step (default) or the explicit one "
                          "at 0.3 of its limit")
     lk.add_argument("--n-save", type=_positive_int, default=201, help="saves per phase (default 201)")
-    lk.add_argument("--out", default="results/lockup", help="output folder (default: results/lockup)")
+    lk.add_argument("--out", default="out/lockup", help="output folder (default: out/lockup under the working folder)")
     lk.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     lk.add_argument("--quiet", action="store_true")
     lk.set_defaults(func=_cmd_lockup)
 
     fg = sub.add_parser("figure", help="write a figure")
     fg.add_argument("which", choices=["phase"], help="phase: E2 phase portraits")
-    fg.add_argument("--out", default="results", help="output folder (default: results)")
+    fg.add_argument("--out", default="out/figures", help="output folder (default: out/figures under the working folder)")
     fg.set_defaults(func=_cmd_figure)
     return p
 
