@@ -419,11 +419,28 @@ def test_atan_ratio_and_the_slip_phase_duration_by_hand():
     assert math.isinf(float(_phase_duration(jnp.asarray(2.0), jnp.asarray(0.8), jnp.asarray(-1.0))))  # v s > g
 
 
-def test_galerkin_energy_terms_are_named_and_sum_to_the_energy():
-    """The Galerkin model's energies by name (what `Solution.energies` reports): kinetic ½ v·Mv."""
+def test_galerkin_energy_terms_are_the_field_integrals():
+    """The Galerkin model's energies by name (what `Solution.energies` reports) against the
+    integrals of its field θ(s) = Σ q_k sin(kπs/L), evaluated here by quadrature on a fine grid:
+    kinetic ½ρR²∫θ_t², bending ½EI R²∫θ_ss², gravity ½wR∫θ² (the small-angle w R (1 − cos θ)) and
+    the load's −½F R²∫θ_s²."""
     rod = jr.RodChannel.reference(0.3)
-    m = jr.GalerkinModel.from_rod(rod, 4, F=float(th.reference_load(rod)))
-    q, v = jnp.array([1e-3, 0.0, -2e-3, 0.0]), jnp.array([0.1, 0.2, 0.0, -0.1])
-    e = m.energy_terms(q, v, 0.0)
-    assert "kinetic" in e and float(e["kinetic"]) == pytest.approx(float(m.kinetic_energy(v)), rel=1e-14)
-    assert float(e["kinetic"]) > 0
+    F = float(th.reference_load(rod))
+    m = jr.GalerkinModel.from_rod(rod, 4, F=F)
+    q, v = np.array([1e-3, 0.0, -2e-3, 0.0]), np.array([0.1, 0.2, 0.0, -0.1])
+    L, R, EI, rho, w = (float(x) for x in (rod.L, rod.R, rod.EI, rod.rho, rod.w))
+    s = np.linspace(0.0, L, 20001)
+    k = np.arange(1, 5)[:, None] * np.pi / L
+    S, C = np.sin(k * s), np.cos(k * s)
+    integral = lambda f: float(np.trapezoid(f, s))  # noqa: E731
+    expected = dict(kinetic=0.5 * rho * R**2 * integral((v @ S) ** 2),
+                    bending=0.5 * EI * R**2 * integral((-(q[:, None] * k**2) * S).sum(0) ** 2),
+                    gravity=0.5 * w * R * integral((q @ S) ** 2),
+                    load=-0.5 * F * R**2 * integral(((q[:, None] * k) * C).sum(0) ** 2))
+    e = m.energy_terms(jnp.asarray(q), jnp.asarray(v), 0.0)
+    assert set(e) == set(expected)
+    for name, value in expected.items():
+        assert float(e[name]) == pytest.approx(value, rel=1e-6), name
+    assert float(m.kinetic_energy(jnp.asarray(v))) == pytest.approx(expected["kinetic"], rel=1e-6)
+
+
