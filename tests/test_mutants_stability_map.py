@@ -155,8 +155,6 @@ def test_plot_shows_the_members_theory_fit_and_searched_curve(tmp_path):
     assert "single-mode theory P6 (slope −1/2)" in labels
     assert "fitted boundary: v0 ∝ ΔF^(-2.000 ± nan)" in labels
     assert "searched boundary (rtol 0.001): v0* ∝ ΔF^(-1.500)" in labels
-    assert tuple(stable.get_edgecolor()[0][:3]) == pytest.approx((0.1725, 0.6275, 0.1725), abs=1e-3)  # tab:green
-    assert tuple(buckled.get_facecolor()[0][:3]) == pytest.approx((0.8392, 0.1529, 0.1569), abs=1e-3)  # tab:red
     lines = {ln.get_label(): ln for ln in ax.get_lines()}
     theory = lines["single-mode theory P6 (slope −1/2)"]
     x, y = theory.get_data()
@@ -246,34 +244,23 @@ def test_searched_boundary_fits_the_roots_that_converged(monkeypatch):
     assert out["curve_v0"] == [8e-3, None] and math.isnan(out["curve_exponent"]) and math.isnan(out["curve_exponent_stderr"])
 
 
-def test_the_figure_reads_the_same_at_its_size_markers_and_other_modes(tmp_path):
-    """What a reader of `map.png` compares: the panel size (6.2 in per μ by 5 in), hollow
-    circles for stable members against crosses for buckled ones and black squares for failed
-    runs (all of area 22 pt²), no "failed run" entry when every run succeeded, the theory
-    curve of the map's own mode, and the searched curve drawn 2 pt wide over the 1.5-pt fit."""
+def test_the_figure_draws_the_maps_own_mode_and_no_failed_entry_when_none_failed(tmp_path):
+    """What a reader of `map.png` reads off it: the theory curve of the map's own mode (7 here,
+    not 6), the searched curve's label, and no "failed run" markers or legend entry when every run
+    succeeded. (Sizes, colours and line widths are styling, marked `pragma: no mutate` in the
+    source, and not pinned here.)"""
     dF, res = _map(0.3)
     s = sm._summarise(res, dF, V0, 0.3)
     s["curve_v0"], s["curve_rtol"], s["curve_exponent"] = [7e-3, None, 1e-3], 1e-3, -1.5
     summary = {"model": "field", "mode": 7, "t1": 2.0, "n": 32, "dt": 1e-5, "dF": dF.tolist(), "v0": V0.tolist(),
                "maps": {"0.3": s}}
     fig = sm.plot_maps({0.3: res}, summary)
-    assert tuple(fig.get_size_inches()) == pytest.approx((6.2, 5.0))
     ax = fig.axes[0]
-    stable, buckled, failed = ax.collections
-    assert len(stable.get_facecolor()) == 0 or stable.get_facecolor()[0][3] == 0  # hollow
-    assert tuple(failed.get_facecolor()[0][:3]) == (0.0, 0.0, 0.0)
-    for c in (stable, buckled, failed):
-        assert list(c.get_sizes()) == [22]
-    from matplotlib.markers import MarkerStyle
-
-    cross = MarkerStyle("x")
-    np.testing.assert_allclose(buckled.get_paths()[0].vertices,
-                               cross.get_path().transformed(cross.get_transform()).vertices)  # a thin cross
     lines = {ln.get_label(): ln for ln in ax.get_lines()}
     x, y = lines["single-mode theory P6 (slope −1/2)"].get_data()
     np.testing.assert_allclose(y, 1e3 * sm.theory_boundary(jr.RodChannel.reference(0.3), x, 7), rtol=1e-12)
     assert not np.allclose(y, 1e3 * _theory_by_hand(jr.RodChannel.reference(0.3), x))  # mode 7, not 6
-    assert lines["searched boundary (rtol 0.001): v0* ∝ ΔF^(-1.500)"].get_linewidth() == 2
+    assert "searched boundary (rtol 0.001): v0* ∝ ΔF^(-1.500)" in lines
     # every run succeeded: no failed-run markers and no legend entry for them
     ok = _all_succeeded(res)
     fig = sm.plot_maps({0.3: ok}, {**summary, "maps": {"0.3": sm._summarise(ok, dF, V0, 0.3)}})
