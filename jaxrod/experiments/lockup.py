@@ -37,10 +37,11 @@ VARIANTS = [("chen", "with_weight"), ("chen", "without_weight"), ("wu_juvkam_wol
             ("wu_juvkam_wold", "without_weight")]
 SETTINGS = {
     # groups: (L/ℓ, far-load lanes' μL/ℓ, the lock-up lane's first μL/ℓ, "auto" or None);
-    # runs: (segments per buckle wavelength, push speed [m/s]) — the base, twice the segments, half the speed
+    # runs: (segments per buckle wavelength, push speed [m/s]) — the base, twice the segments, half the speed;
+    # every lane runs at the base, the lanes in `converge` (μL/ℓ, or "lock" for the lock-up lane) at all
     False: dict(groups=((2.0, (0.5, 1.0, 1.5, 2.0), None), (4.0, (3.0, 4.0), "auto")), f_c=6.0,
-                runs=((16, 10e-3), (32, 10e-3), (16, 5e-3)), first_push=0.4, stage_push=0.15, max_stages=12,
-                saves_per_stage=41),
+                runs=((16, 10e-3), (32, 10e-3), (16, 5e-3)), converge=(1.0, 2.0, "lock"), first_push=0.4,
+                stage_push=0.15, max_stages=12, saves_per_stage=41),
     True: dict(groups=((2.0, (0.5, 1.0, 2.0), None),), f_c=6.0, runs=((16, 10e-3),), first_push=0.4,
                stage_push=0.15, max_stages=8, saves_per_stage=41),
     "tiny": dict(groups=((1.0, (0.5,), 0.5),), f_c=6.0, runs=((8, 10e-3),), first_push=0.004, stage_push=0.002,
@@ -66,6 +67,19 @@ def _closed(rod, X, f_c):
             lock_at_fc=float(chain.lockup_length(EI, w, r, mu, F_in=f_c * F0, **kw)) * mu / ell,
             lock=float(chain.lockup_length(EI, w, r, mu, **kw)) * mu / ell)
     return out
+
+
+def _jobs(S, out):
+    """(group, run, path) of every staircase of the setting: each group at the base run, and its
+    lanes in `converge` at the others."""
+    conv = S.get("converge")
+    for Lx, Xs, lock in S["groups"]:
+        for k, run in enumerate(S["runs"]):
+            if k > 0 and conv is not None:
+                Xs, lock = tuple(X for X in Xs if X in conv), (lock if "lock" in conv else None)
+                if not Xs and lock is None:
+                    continue
+            yield (Lx, Xs, lock), run, os.path.join(out, "jobs", f"L{Lx:g}_w{run[0]}_v{1e3 * run[1]:g}.json")
 
 
 def _job(args):
@@ -117,14 +131,11 @@ def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
     S = SETTINGS[quick]
     os.makedirs(os.path.join(out, "jobs"), exist_ok=True)
     jobs = []
-    for g in S["groups"]:
-        for run in S["runs"]:
-            name = f"L{g[0]:g}_w{run[0]}_v{1e3 * run[1]:g}.json"
-            path = os.path.join(out, "jobs", name)
-            if os.path.exists(path) and json.load(open(path)).get("settings") == json.loads(json.dumps(S)):
-                continue
-            jobs.append(((g[0], g[1], g[2]), run, S, path, progress))
-    jobs.sort(key=lambda j: -len(j[0][1]) * j[0][0] * j[1][0] / j[1][1])  # the costliest first
+    for g, run, path in _jobs(S, out):
+        if os.path.exists(path) and json.load(open(path)).get("settings") == json.loads(json.dumps(S)):
+            continue
+        jobs.append((g, run, S, path, progress))
+    jobs.sort(key=lambda j: -(len(j[0][1]) + (j[0][2] is not None)) * j[0][0] * j[1][0] / j[1][1])  # costliest first
     workers = workers or min(len(jobs), os.cpu_count() or 1) or 1
     t = time.time()
     if progress:
@@ -138,10 +149,9 @@ def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
         if pool:
             pool.shutdown()
     results = []
-    for g in S["groups"]:
-        for run in S["runs"]:
-            with open(os.path.join(out, "jobs", f"L{g[0]:g}_w{run[0]}_v{1e3 * run[1]:g}.json")) as fh:
-                results.append(json.load(fh))
+    for _, _, path in _jobs(S, out):
+        with open(path) as fh:
+            results.append(json.load(fh))
     return _write(out, S, results, time.time() - t)
 
 
