@@ -301,7 +301,10 @@ def lane(rec: dict, k: int) -> dict:
 
 
 def locked(rec: dict, cap: float | None = None) -> bool | None:
-    """Whether an `inject` run locked up: over the last fifth of the push its far end advanced
+    """The earlier cap heuristic, kept for the committed runs it labelled (`results/lockup/`,
+    `results/paper/lockup/`); read runs by [`jaxrod.lockup.verdict`][] instead, which asks for a
+    steady state and reports what the rod does not resolve. Whether an `inject` run locked up:
+    over the last fifth of the push its far end advanced
     less than half as far as its entry, or its entry force passed `cap` [F₀] (default ℓ/r, half
     of 2EI/r², where the helix angle stops being small and the run leaves the scene's range).
     `None` for a run whose force became non-finite before passing `cap`: a failed run says
