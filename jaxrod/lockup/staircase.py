@@ -57,15 +57,18 @@ def _next(history, p, f_c, rel, growth=0.12):
     """The next value of the varied parameter after the steady stages `history` [(p, f̄)], all
     with f̄ ≤ f_c, the last at `p`: half of the way to where the secant of log f̄ through the last
     two reaches f_c, at most `growth` × p (the entry force rises ever faster as the far load or
-    μ nears its bound, so the secant from below overshoots) and at least 0.9 × `rel` × p; the
-    least step if the last steady force did not rise and is within 10 % of f_c."""
+    μ nears its bound, so the secant from below overshoots) and at least 0.9 × `rel` × p; only
+    that least step once the last steady force is within 5 % of f_c (or within 10 % and did not
+    rise), so that the stage that crosses f_c closes a bracket no wider than `rel`."""
     floor = p * (1 + 0.9 * rel) if p > 0 else 0.1
     if len(history) < 2:
         return max(floor, p * (1 + growth))
     (p0, f0), (p1, f1) = history[-2], history[-1]
     slope = (math.log(f1) - math.log(f0)) / (p1 - p0) if p1 > p0 else 0.0
-    if not slope > 0:  # the steady force did not rise: noise; near the bound only the smallest step is safe
-        return floor if f1 >= 0.9 * f_c else max(floor, p1 * (1 + growth))
+    if f1 >= 0.95 * f_c or (not slope > 0 and f1 >= 0.9 * f_c):  # near the bound only the least step is safe
+        return floor
+    if not slope > 0:  # the steady force did not rise: noise
+        return max(floor, p1 * (1 + growth))
     target = p1 + (math.log(f_c) - math.log(f1)) / slope
     return max(floor, p1 + min(0.5 * (target - p1), growth * p1))
 
