@@ -35,6 +35,7 @@ def test_a_helix_built_from_the_laws_reads_one_on_every_law():
     assert got["N_ratio"] == pytest.approx(1.0, abs=0.02)  # w cos θ averages out over a turn
     assert got["N_ratio_with_weight"] < got["N_ratio"] - 0.05
     assert got["soft_string_ratio"] == pytest.approx(1.0, abs=0.03)
+    assert got["soft_string_ratio_whole"] == pytest.approx(1.0, abs=0.01)
 
 
 def test_a_tighter_helix_and_a_harder_wall_are_read_as_such():

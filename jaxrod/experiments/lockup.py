@@ -196,7 +196,8 @@ def _write(out, S, results, wall):
                                  F_lo_over_F0=hx["F_range"][0] / res["F0"], F_hi_over_F0=hx["F_range"][1] / res["F0"],
                                  pitch_over_lubinski=hx["pitch_ratio"], N_over_mitchell=hx["N_ratio"],
                                  N_over_mitchell_plus_w=hx["N_ratio_with_weight"],
-                                 dF_ds_over_mu_N=hx["soft_string_ratio"]))
+                                 dF_ds_over_mu_N=hx["soft_string_ratio"],
+                                 whole_rod_dF_over_mu_int_N=hx["soft_string_ratio_whole"]))
             p = lane["profiles"][-1] if lane["profiles"] else None
             if p is not None:
                 for i, (th, N) in enumerate(zip(p["theta"], p["wall_force"])):

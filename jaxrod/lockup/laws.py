@@ -43,7 +43,8 @@ def helix_against_laws(theta, wall_force, axial_force, l0: float, EI: float, w: 
     averaged over the window), `N_ratio` (median of
     N_turn/Mitchell), `N_ratio_with_weight` (against Mitchell + w), `soft_string_ratio` (the
     rise of F across the inner nodes over μ∫N ds there), `F_range` [N] (lowest and highest F
-    there), `inner_length` [m]."""
+    there), `inner_length` [m]; and over the whole rod `soft_string_ratio_whole` (F at the entry
+    less F at the far end over μ∫N ds: the friction's bookkeeping, whatever the shape)."""
     theta, N, Fseg = (np.asarray(a, float) for a in (theta, wall_force, axial_force))
     n = Fseg.size
     if theta.shape != (n + 1,) or N.shape != (n + 1,):
@@ -65,8 +66,9 @@ def helix_against_laws(theta, wall_force, axial_force, l0: float, EI: float, w: 
     mitchell = r * F**2 / (4 * EI)
     turn_half = np.clip(np.round(0.5 * np.where(np.isfinite(pitch), pitch, 0.0) / l0), 1, n).astype(int)
     N_turn = _window_mean(N, turn_half)
+    whole = (F[-1] - F[0]) / (mu * np.trapezoid(N, s)) if mu > 0 else np.nan
     out = dict(s=s, F=F, N=N, N_turn=N_turn, pitch=pitch, pitch_lubinski=lub, N_mitchell=mitchell, helical=helical,
-               inner=inner)
+               inner=inner, soft_string_ratio_whole=float(whole))
     if not inner.any():
         return dict(out, pitch_ratio=np.nan, N_ratio=np.nan, N_ratio_with_weight=np.nan, soft_string_ratio=np.nan,
                     F_range=(np.nan, np.nan), inner_length=0.0)
