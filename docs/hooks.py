@@ -3,7 +3,7 @@
 - The research notebooks (notebooks/*.ipynb) and the paper figures (results/paper/*/*.png) are
   added to the site where they live in the repository, so nothing is copied into docs/.
 - The marker `<!-- results-table -->` in a page is replaced by the results table that
-  results/paper/table.py prints from results/paper/results.json (the README's table), and
+  studies/paper/table.py prints from results/paper/results.json (the README's table), and
   `<!-- cli-help -->` by the `--help` of every `jaxrod` command.
 """
 
@@ -32,7 +32,7 @@ def on_files(files, config):
 
 def on_page_markdown(markdown, page, config, files):
     if TABLE_MARKER in markdown:
-        table = subprocess.run([sys.executable, str(ROOT / "results" / "paper" / "table.py")], check=True,
+        table = subprocess.run([sys.executable, str(ROOT / "studies" / "paper" / "table.py")], check=True,
                                capture_output=True, text=True).stdout
         markdown = markdown.replace(TABLE_MARKER, table)
     if CLI_MARKER in markdown:

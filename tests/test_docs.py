@@ -55,7 +55,7 @@ def test_guides_notebooks_cli_and_results_table(site):
     cli = _page(site, "cli")
     assert "usage: jaxrod map" in cli and "--out OUT" in cli  # the help, written at build time
     paper = _page(site, "paper")
-    assert "E3 map: boundary exponent" in paper and "<table>" in paper  # from results/paper/table.py
+    assert "E3 map: boundary exponent" in paper and "<table>" in paper  # from studies/paper/table.py
     for nb in sorted(ROOT.glob("notebooks/0*.ipynb")):
         html = _page(site, f"notebooks/{nb.stem}")
         if '"image/png"' in nb.read_text():  # stored figures are shown, not re-run

@@ -17,8 +17,8 @@ path, each after a `|`:
 
 The output of a script is framed likewise:
 
-    <!-- generated: results/paper/table.py --compact -->
-    ...what `python results/paper/table.py --compact` prints...
+    <!-- generated: studies/paper/table.py --compact -->
+    ...what `python studies/paper/table.py --compact` prints...
     <!-- end generated -->
 
 After a results file is rewritten or a script's output changes, `python tests/test_readme.py
@@ -90,7 +90,7 @@ def test_frames_exist():
     readme = {(kind, spec.split("|")[0].split()[0]) for kind, spec, _ in _frames("README.md")}
     assert ("include", "benchmarks/results/first_answer/first_answer.md") in readme
     assert ("include", "results/mutation/report.md") in readme
-    assert ("generated", "results/paper/table.py") in readme
+    assert ("generated", "studies/paper/table.py") in readme
 
 
 @pytest.mark.parametrize("name", FILES)

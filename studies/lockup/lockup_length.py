@@ -5,7 +5,7 @@ up (`locked`) when its far end falls behind or its entry force passes ℓ/r F₀
 μL_lock/ℓ is 4.06 (Chen, with weight), 4.24 (Chen, without), 4.66 / 4.75 (Wu & Juvkam-Wold).
 Writes lockup_length.csv (one row per lane, with commit, date and wall time).
 
-    python results/lockup/lockup_length.py"""
+    python studies/lockup/lockup_length.py"""
 
 import csv
 import datetime
@@ -21,7 +21,8 @@ import numpy as np  # noqa: E402
 
 from jaxrod.lockup.push import inject_lanes, lane, locked, push_rod, units  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 L_OVER_ELL, X = 5.0, (3.0, 4.0, 4.5, 5.0)
 
 

@@ -6,7 +6,7 @@ the second zoomed into the first's bracket), next to the field model's converged
 search, for each (ΔF, n) given. Appends one row per case to `v0_segments.csv` beside this file
 (plain numbers; the parameters in the columns).
 
-    python results/paper/e6/v0_segments.py --dF 5 20 --n 120
+    python studies/paper/e6/v0_segments.py --dF 5 20 --n 120
 """
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ jax.config.update("jax_enable_x64", True)
 
 from jaxrod.experiments.rod3d import crosscheck_critical_velocity  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 COLUMNS = ["dF", "n_segments", "mu", "friction_at", "ends", "t1", "field_mm_s", "rod3d_mm_s", "bracket_lo_mm_s",
            "bracket_hi_mm_s", "difference_percent", "monotonic", "rod3d_runs", "seconds_rod3d"]
 

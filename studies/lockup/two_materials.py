@@ -5,7 +5,7 @@ the reference nitinol (d = 1.5 mm, E = 77 GPa, ρ_v = 6450 kg/m³) and a softer,
 (20/s) by √(g/r), so that the two runs are the same in time units √(r/g) too. Writes
 two_materials.json beside this file.
 
-    python results/lockup/two_materials.py   # about 2 min on a 2-core CPU
+    python studies/lockup/two_materials.py   # about 2 min on a 2-core CPU
 """
 
 import json
@@ -16,6 +16,9 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 import numpy as np  # noqa: E402
+
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 
 import jaxrod as jr  # noqa: E402
 from jaxrod.lockup.push import inject, push_rod, units  # noqa: E402
@@ -44,7 +47,7 @@ def main():
                          helical_over_ell=float(r["helical"][-1] / ell), sinusoidal_over_ell=float(r["sinusoidal"][-1] / ell),
                          result=int(r["result"]))
         print(name, json.dumps(out[name]), flush=True)
-    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "two_materials.json"), "w") as fh:
+    with open(os.path.join(HERE, "two_materials.json"), "w") as fh:
         json.dump(out, fh, indent=1)
 
 

@@ -7,7 +7,7 @@ part of `jaxrod reproduce e6 --model rod3d` (`jaxrod.experiments.paper3d.e6c`), 
 `rod3d_random_position_n{n}.csv` per segment count beside this file (commit, date, wall time;
 a point already there is not run again).
 
-    python results/paper/e6/rod3d_random_position.py --n 120 240
+    python studies/paper/e6/rod3d_random_position.py --n 120 240
 
 The question (issue [paper3d], reason (D)): the paper sees a single mode, m = 21; the field
 model's buckled state is broadband (mode 21 with 21 % of the power at 1.05 ΔF*)."""
@@ -23,7 +23,8 @@ jax.config.update("jax_enable_x64", True)
 
 from jaxrod.experiments.paper3d import e6c  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 
 
 def main():

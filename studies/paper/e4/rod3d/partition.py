@@ -17,7 +17,7 @@ the slip fraction, each kinetic part's largest value and its time integral, the 
 energy, the initial kinetic energy, the wall time) and `.png` (slip fraction and the kinetic
 parts against time), with commit and date.
 
-    python results/paper/e4/rod3d/partition.py --n 240 --mu 0.05
+    python studies/paper/e4/rod3d/partition.py --n 240 --mu 0.05
 """
 
 from __future__ import annotations
@@ -40,7 +40,8 @@ from jaxrod import boundary as bd  # noqa: E402
 from jaxrod.output import write_csv  # noqa: E402
 from jaxrod.scene import Scene, make_perturbation  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 PERTURBATION = {"A": "sine", "B": "random-velocity"}
 FIELD_NODES = 499  # the random field's grid (500 segments) resolved, as the scene's default for random
 

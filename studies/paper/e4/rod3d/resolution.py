@@ -4,7 +4,7 @@ keys, or `--realization r`) at the segment counts given, by label bisection to r
 bracket a factor `--width` (8) either side of the field model's ΔF* (first and last runs are its ends). Every point is appended to
 `resolution.csv` as it finishes (commit, date, wall time with compilation).
 
-    python results/paper/e4/rod3d/resolution.py --mu 0.05 --cases A B --n 60 120 240
+    python studies/paper/e4/rod3d/resolution.py --mu 0.05 --cases A B --n 60 120 240
 
 The question (issue [paper3d], reason (A)): at small μ the field model's random-velocity ΔF* is
 4.4× the sine's, where the paper finds them close. Does the 3D rod close that gap, and how many
@@ -26,7 +26,8 @@ jax.config.update("jax_enable_x64", True)
 import jaxrod as jr  # noqa: E402
 from jaxrod import boundary as bd  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 PERTURBATION = {"A": "sine", "B": "random-velocity"}
 COLUMNS = ["case", "mu", "realization", "model", "n", "dF_star", "lo", "hi", "runs", "result", "wall_s", "commit", "date"]
 

@@ -7,7 +7,7 @@ r/ℓ = 0.02, μ = 0.5, the reference nitinol, 5 mm/s, a push of 0.075 L, dampin
 Every run is appended to far_load_max_runs_muL<X>.csv as it finishes and replayed from it on a rerun
 (a stopped search loses nothing); the result per μL/ℓ goes to far_load_max_muL<X>.csv.
 
-    python results/lockup/far_load_max.py --muL 0.5 1 --bracket 5 12 3.5 5
+    python studies/lockup/far_load_max.py --muL 0.5 1 --bracket 5 12 3.5 5
 """
 
 import argparse
@@ -25,7 +25,8 @@ from jaxrod.lockup.closed_forms import HELICAL_LAWS, HELICAL_ONSETS  # noqa: E40
 from jaxrod.lockup.push import inject, locked, push_rod, units  # noqa: E402
 from jaxrod.output import write_csv  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 SPEED, DAMPING, PUSH_PER_LENGTH = 5e-3, 20.0, 0.075
 
 

@@ -1,4 +1,4 @@
-"""Print the results table from results.json (python results/paper/table.py [--compact]).
+"""Print the results table from results.json (python studies/paper/table.py [--compact]).
 
 The full table is the documentation site's (docs/paper.md, written at build time by docs/hooks.py);
 `--compact` prints the README's: the headline rows, without the model and command columns
@@ -26,7 +26,8 @@ import sys
 
 import numpy as np
 
-here = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+here = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 r = json.load(open(os.path.join(here, "results.json")))
 with open(os.path.join(here, "paper_numbers.json")) as fh:
     P = json.load(fh)["numbers"]  # the paper's numbers, each with its wording and source
@@ -49,7 +50,7 @@ rows.append(("E3 map: frictionless rod buckles for every ΔF > 0", "yes",
              "yes" if e3["frictionless_buckles_for_every_dF_gt_0"] else "no", "field", "jaxrod reproduce e3"))
 rows.append(("E3 map: largest stable load ΔF/F⁰cr (μ = 0.3)", "≈ 50 (paper)",
              f"{e3['largest_stable_dF_over_F0cr']:.1f} (largest on the grid)", "field", "jaxrod reproduce e3"))
-# E3 with the full model: boundary searches of the 3D rod (results/paper/e3/rod3d_boundary.py)
+# E3 with the full model: boundary searches of the 3D rod (studies/paper/e3/rod3d_boundary.py)
 # the finest run over the 8 loads (the implicit leapfrog, the 3D rod's default scheme; the explicit
 # projected leapfrog; or the earlier Verlet)
 b3_path = next((p for p in (os.path.join(here, "e3", f"rod3d_boundary_n{n}{s}.json") for n in (500, 240, 120)
@@ -63,11 +64,11 @@ if os.path.exists(b3_path):
                  "boundary search to 1 %)", "−0.5",
                  f"{b3['exponent_rod3d']:.3f} ± {b3['exponent_rod3d_stderr']:.3f}, {b3['n_segments']} segments (field model at the same loads: "
                  f"{b3['exponent_field']:.3f} ± {b3['exponent_field_stderr']:.3f})",
-                 f"rod3d, {b3['n_segments']} segments", "python results/paper/e3/rod3d_boundary.py"))
+                 f"rod3d, {b3['n_segments']} segments", "python studies/paper/e3/rod3d_boundary.py"))
     rows.append(("E3 boundary of the 3D rod: v₀* against the field model's, per load", "models agree",
                  "; ".join(f"{p['dF']:g} N: {1e3 * p['rod3d']:.2f} vs {1e3 * p['field']:.2f} mm/s "
                            f"({100 * (p['rod3d'] / p['field'] - 1):+.1f} %)" for p in pts),
-                 f"rod3d, {b3['n_segments']} segments / field", "python results/paper/e3/rod3d_boundary.py"))
+                 f"rod3d, {b3['n_segments']} segments / field", "python studies/paper/e3/rod3d_boundary.py"))
 # the 3D rod's convergence in its segment count (same search, 60-500 segments)
 conv = []
 for n in (60, 120, 240, 500):
@@ -78,7 +79,7 @@ if conv:
     rows.append(("E3 boundary of the 3D rod: v₀* against the segment count (ΔF = 5, 20 N)", "converged",
                  "; ".join(f"{q['dF']:g} N, {n}: {1e3 * q['rod3d']:.2f} mm/s ({100 * (q['rod3d'] / q['field'] - 1):+.1f} %)"
                            for n, q in sorted(conv, key=lambda c: (c[1]["dF"], c[0]))),
-                 "rod3d, 60-500 segments / field", "python results/paper/e3/rod3d_boundary.py --n N --dF 5 20"))
+                 "rod3d, 60-500 segments / field", "python studies/paper/e3/rod3d_boundary.py --n N --dF 5 20"))
 e4 = r["e4"]
 mus = np.asarray(e4["mu"])
 low_fits = {}

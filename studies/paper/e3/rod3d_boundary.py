@@ -5,9 +5,9 @@ Every finished 3D run is appended to `rod3d_runs.csv` beside this file and repla
 the loads can be split between processes (each load's search depends only on its load) and a
 last call with every load writes the summary from the recorded runs without running them again:
 
-    python results/paper/e3/rod3d_boundary.py --n 120 --dF 0.5 1 2 5 &
-    python results/paper/e3/rod3d_boundary.py --n 120 --dF 10 20 40 60 &
-    wait; python results/paper/e3/rod3d_boundary.py --n 120 --dF 0.5 1 2 5 10 20 40 60
+    python studies/paper/e3/rod3d_boundary.py --n 120 --dF 0.5 1 2 5 &
+    python studies/paper/e3/rod3d_boundary.py --n 120 --dF 10 20 40 60 &
+    wait; python studies/paper/e3/rod3d_boundary.py --n 120 --dF 0.5 1 2 5 10 20 40 60
 
 Writes `rod3d_boundary_n{n}.json` (`_axis` added with `--friction-at axis`, `_implicit` with the
 default `--scheme implicit`, `_leapfrog` with `--scheme leapfrog`: the files without either hold
@@ -27,7 +27,8 @@ jax.config.update("jax_enable_x64", True)
 from jaxrod.experiments.e3_rod3d import boundary_3d  # noqa: E402
 from jaxrod.experiments.paper3d import write_boundary  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 
 
 def main():

@@ -15,7 +15,7 @@ This script adds them to the field model (a subclass: the acceleration gains
 the impulse), searches v₀* by label bisection as the boundary search does, and appends
 (ΔF, P1, exact geometry, exact geometry + N) rows to `field_exact_geometry.csv` beside it:
 
-    python results/paper/e3/diagnostics/field_exact_geometry.py 0.5 1 2 5 10 20 40 60
+    python studies/paper/e3/diagnostics/field_exact_geometry.py 0.5 1 2 5 10 20 40 60
 """
 import csv
 import os
@@ -48,7 +48,8 @@ class FieldNLN(FieldNL):
         scale = jnp.cos(q) + r.rho * r.R * v_prev**2 / r.w
         return friction.update(v_trial, v_prev, h, f_s * scale, f_d * scale)
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+_ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
+HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
 rod = RodChannel.reference(0.3)
 for dF in [float(x) for x in sys.argv[1:]]:
     r, _ = critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
