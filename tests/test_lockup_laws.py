@@ -36,6 +36,17 @@ def test_a_helix_built_from_the_laws_reads_one_on_every_law():
     assert got["N_ratio_with_weight"] < got["N_ratio"] - 0.05
     assert got["soft_string_ratio"] == pytest.approx(1.0, abs=0.03)
     assert got["soft_string_ratio_whole"] == pytest.approx(1.0, abs=0.01)
+    assert got["reversals"] == 0 and got["wall_ratio_winding"] == pytest.approx(1.0, abs=0.03)
+
+
+def test_a_helix_that_changes_hand_is_counted():
+    """The same helix, its hand reversed halfway along (θ' changes sign at s = L/2): one reversal."""
+    theta, N, Fseg, l0 = _helix()
+    th = np.unwrap(theta)
+    mid = th.size // 2
+    th[mid:] = 2 * th[mid] - th[mid:]
+    got = helix_against_laws(np.angle(np.exp(1j * th)), N, Fseg, l0, EI, w, r, mu, wave)
+    assert got["reversals"] == 1
 
 
 def test_a_tighter_helix_and_a_harder_wall_are_read_as_such():

@@ -197,7 +197,9 @@ def _write(out, S, results, wall):
                                  pitch_over_lubinski=hx["pitch_ratio"], N_over_mitchell=hx["N_ratio"],
                                  N_over_mitchell_plus_w=hx["N_ratio_with_weight"],
                                  dF_ds_over_mu_N=hx["soft_string_ratio"],
-                                 whole_rod_dF_over_mu_int_N=hx["soft_string_ratio_whole"]))
+                                 whole_rod_dF_over_mu_int_N=hx["soft_string_ratio_whole"],
+                                 winding_over_ell=hx["winding_length"] / res["ell"], hand_reversals=hx["reversals"],
+                                 winding_int_N_over_int_mitchell=hx["wall_ratio_winding"]))
             p = lane["profiles"][-1] if lane["profiles"] else None
             if p is not None:
                 for i, (th, N) in enumerate(zip(p["theta"], p["wall_force"])):

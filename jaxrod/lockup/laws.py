@@ -43,8 +43,11 @@ def helix_against_laws(theta, wall_force, axial_force, l0: float, EI: float, w: 
     averaged over the window), `N_ratio` (median of
     N_turn/Mitchell), `N_ratio_with_weight` (against Mitchell + w), `soft_string_ratio` (the
     rise of F across the inner nodes over μ∫N ds there), `F_range` [N] (lowest and highest F
-    there), `inner_length` [m]; and over the whole rod `soft_string_ratio_whole` (F at the entry
-    less F at the far end over μ∫N ds: the friction's bookkeeping, whatever the shape)."""
+    there), `inner_length` [m]; over the whole rod `soft_string_ratio_whole` (F at the entry
+    less F at the far end over μ∫N ds: the friction's bookkeeping, whatever the shape); over the
+    winding nodes (θ spans more than π within the window, as `push.extents`' helix)
+    `winding_length` [m], `reversals` (how often the windowed dθ/ds changes sign there: a helix
+    that changes hand) and `wall_ratio_winding` (∫N ds over ∫ r F²/(4EI) ds there)."""
     theta, N, Fseg = (np.asarray(a, float) for a in (theta, wall_force, axial_force))
     n = Fseg.size
     if theta.shape != (n + 1,) or N.shape != (n + 1,):
@@ -56,7 +59,8 @@ def helix_against_laws(theta, wall_force, axial_force, l0: float, EI: float, w: 
     half = max(1, int(round(0.5 * wave / l0)))
     pad = np.pad(th, half, mode="edge")
     win = np.lib.stride_tricks.sliding_window_view(pad, 2 * half + 1)
-    helical = (win.max(-1) - win.min(-1)) > 2 * np.pi
+    span = win.max(-1) - win.min(-1)
+    helical, winding = span > 2 * np.pi, span > np.pi  # a full turn / half a turn within the window
     inner = helical.copy()
     inner[:half] = inner[-half:] = False  # the windows there are cut by the rod's ends
     rate = np.abs(np.gradient(th, s))
@@ -67,8 +71,14 @@ def helix_against_laws(theta, wall_force, axial_force, l0: float, EI: float, w: 
     turn_half = np.clip(np.round(0.5 * np.where(np.isfinite(pitch), pitch, 0.0) / l0), 1, n).astype(int)
     N_turn = _window_mean(N, turn_half)
     whole = (F[-1] - F[0]) / (mu * np.trapezoid(N, s)) if mu > 0 else np.nan
+    turning = _window_mean(np.gradient(th, s), half)  # signed: its sign is the helix's hand
+    hand = np.sign(turning[winding])
+    reversals = int(np.count_nonzero(hand[1:] != hand[:-1])) if hand.size > 1 else 0
+    on = np.where(winding, 1.0, 0.0)
+    wall_ratio = (np.trapezoid(N * on, s) / np.trapezoid(mitchell * on, s)) if winding.any() else np.nan
     out = dict(s=s, F=F, N=N, N_turn=N_turn, pitch=pitch, pitch_lubinski=lub, N_mitchell=mitchell, helical=helical,
-               inner=inner, soft_string_ratio_whole=float(whole))
+               inner=inner, soft_string_ratio_whole=float(whole), reversals=reversals,
+               wall_ratio_winding=float(wall_ratio), winding_length=float(winding.sum() * l0))
     if not inner.any():
         return dict(out, pitch_ratio=np.nan, N_ratio=np.nan, N_ratio_with_weight=np.nan, soft_string_ratio=np.nan,
                     F_range=(np.nan, np.nan), inner_length=0.0)
