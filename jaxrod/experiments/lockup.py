@@ -12,7 +12,7 @@ unbounded F_far,max and L_lock are written beside them.
 Lanes that share a rod length form one vmapped staircase; a group (one rod length) at one
 setting of (segments per buckle wavelength, push speed) is one job, and the jobs run in worker
 processes, one per core. Each job writes its own JSON under `jobs/` as it finishes (a second run
-skips the jobs whose file is there with the same settings); `curve.csv`, `lockup_length.csv`,
+skips the jobs whose file is there with the same settings); `curve.csv`, `lockup_length_at_fc.csv`,
 `stages.csv`, `profiles.csv` (the last steady stage's wall angle, wall force and axial force
 along the rod), `helix_laws.csv` (those profiles against Lubinski, Mitchell and the soft string,
 `jaxrod.lockup.laws`), `onsets.csv` (the sinusoidal and helical onsets bracketed by the steady
@@ -167,6 +167,7 @@ def _write(out, S, results, wall):
             worst = min([s["segments_per_turn"] for s in lane["stages"] if s["status"] == "sliding"], default=math.inf)
             angle = max([s["helix_angle"] for s in lane["stages"] if s["status"] == "sliding"], default=0.0)
             base = dict(n_segments=res["n"], push_speed=res["speed"], status=lane["status"], entry_force_bound=res["f_c"],
+                        segments_per_wave=res["per_wave"],
                         L_over_ell=res["L_over_ell"], stages=len(lane["stages"]), segments_per_turn_sliding=worst,
                         helix_angle_sliding_deg=angle)
             lo = math.nan if lane["lo"] is None else lane["lo"]
@@ -210,7 +211,7 @@ def _write(out, S, results, wall):
     onsets = _onsets(results)
     write_csv(os.path.join(out, "onsets.csv"), onsets)
     write_csv(os.path.join(out, "curve.csv"), curve)
-    write_csv(os.path.join(out, "lockup_length.csv"), locks)
+    write_csv(os.path.join(out, "lockup_length_at_fc.csv"), locks)
     write_csv(os.path.join(out, "stages.csv"), stages)
     write_csv(os.path.join(out, "profiles.csv"), profiles)
     write_csv(os.path.join(out, "helix_laws.csv"), laws)
@@ -264,22 +265,26 @@ def _figure(out, S, curve, locks):
         ax.plot(X, at, "-", color=c, lw=1.2, label=f"{name}: at f_in = {S['f_c']:g}")
         ax.plot(X, lim, ":", color=c, lw=1, label=f"{name}: f_in → ∞")
     marks = {}
-    for row in curve:
-        key = (row["n_segments"] / row["L_over_ell"], row["push_speed"])
+    for row in curve + locks:
+        key = (row["segments_per_wave"], row["push_speed"])
         style = marks.setdefault(key, ("k", "C4", "C5", "C6")[len(marks) % 4])
         dx = 0.04 * (list(marks).index(key) - 1)
+        if "muL_lock_lo" in row:  # the lock-up length: a bracket along μL/ℓ at F_far = 0
+            lo, hi = row["muL_lock_lo"], row["muL_lock_hi"]
+            if np.isfinite(lo) and np.isfinite(hi):
+                ax.plot([lo, hi], [-0.08 * (1 + list(marks).index(key))] * 2, "-", color=style, lw=4)
+            continue
         lo, hi = row["F_far_max_lo"], row["F_far_max_hi"]
         if np.isfinite(lo) and np.isfinite(hi):
             ax.plot([row["muL_over_ell"] + dx] * 2, [lo, hi], "-", color=style, lw=4)
         elif np.isfinite(lo):
             ax.plot(row["muL_over_ell"] + dx, lo, "^", color=style)
+        elif np.isfinite(hi):
+            ax.plot(row["muL_over_ell"] + dx, hi, "v", color=style)
     for key, style in marks.items():
-        ax.plot([], [], "-", color=style, lw=4, label=f"3D rod, {key[0]:.1f} seg/ℓ, {1e3 * key[1]:g} mm/s")
-    for row in locks:
-        lo, hi = row["muL_lock_lo"], row["muL_lock_hi"]
-        if np.isfinite(lo) and np.isfinite(hi):
-            ax.plot([lo, hi], [0, 0], "-", color="k", lw=6, alpha=0.5)
-    ax.set(xlabel="μL/ℓ", ylabel="F_far,max / F₀", ylim=(0, 10),
+        ax.plot([], [], "-", color=style, lw=4, label=f"3D rod, {key[0]} segments per wave, {1e3 * key[1]:g} mm/s")
+    ax.axhline(0.0, color="0.6", lw=0.5)
+    ax.set(xlabel="μL/ℓ (bars below 0: the lock-up length μL_lock(f_c)/ℓ)", ylabel="F_far,max / F₀", ylim=(-0.35, 6),
            title=f"largest far load pushed at an entry force ≤ {S['f_c']:g} F₀ (bars: 3D rod's brackets)")
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
