@@ -128,6 +128,9 @@ def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
     from concurrent.futures import ProcessPoolExecutor
     import multiprocessing as mp
 
+    import jax
+
+    jax.config.update("jax_enable_x64", True)  # the 3D rod's runs need it, and the closed forms beside them match
     S = SETTINGS[quick]
     os.makedirs(os.path.join(out, "jobs"), exist_ok=True)
     jobs = []
