@@ -18,30 +18,11 @@ MIN_DF_BRACKET = 1e-3
 
 
 def check_args(args) -> None:
-    """Fail on the first invalid value of the parsed `args` of any command."""
-    cmd = args.command
-    mu = getattr(args, "mu", None)
-    if cmd in ("theory", "simulate", "map", "boundary") and mu is not None and mu < 0:
-        _fail(f"argument --mu: {mu!r} is invalid: a friction coefficient must be >= 0.")
-    if cmd == "theory" and args.mode is not None and args.mode < 1:
-        _fail(f"argument --mode: {args.mode!r} is invalid: a mode number must be >= 1.")
-    if cmd == "simulate":
-        _check_simulate(args)
-    if cmd == "map":
-        if np.any(args.v0 <= 0):
-            _fail(f"argument --v0: velocities must be > 0 m/s, got {float(args.v0.min())!r}.")
-        _positive("--t1", args.t1, "s")
-    if cmd == "boundary" and np.any(args.dF <= 0):
-        _fail("argument --dF: loads above F0_6 must be > 0 N for a boundary to exist.")
-    if cmd == "critical-load":
-        if np.any(args.mu <= 0):
-            _fail("argument --mu: friction coefficients must be > 0 (no frictional boundary at mu = 0).")
-        _positive("--amplitude", args.amplitude, "(m/s, N/m or m)")
-        if args.max_dF <= MIN_DF_BRACKET:
-            _fail(f"argument --max-dF: {args.max_dF!r} is invalid: the bracket's top must be > its "
-                  f"bottom, {MIN_DF_BRACKET:g} N.")
-    if cmd == "lockup":
-        _check_lockup(args)
+    """Fail on the first invalid value of the parsed `args`: the command's own checks (`check`,
+    set by its module's `register`), then those every command shares."""
+    check = getattr(args, "check", None)
+    if check is not None:
+        check(args)
     if getattr(args, "n", None) is not None and getattr(args, "model", None) in MIN_N:
         least, unit = MIN_N[args.model]
         if args.n < least:
@@ -51,7 +32,42 @@ def check_args(args) -> None:
             _fail(f"argument --{option}: an empty path is invalid.")
 
 
+def check_mu(args) -> None:
+    """A friction coefficient given as one number must be >= 0."""
+    if args.mu is not None and args.mu < 0:
+        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
+
+
+def _check_theory(args) -> None:
+    check_mu(args)
+    if args.mode is not None and args.mode < 1:
+        _fail(f"argument --mode: {args.mode!r} is invalid: a mode number must be >= 1.")
+
+
+def _check_map(args) -> None:
+    check_mu(args)
+    if np.any(args.v0 <= 0):
+        _fail(f"argument --v0: velocities must be > 0 m/s, got {float(args.v0.min())!r}.")
+    _positive("--t1", args.t1, "s")
+
+
+def _check_boundary(args) -> None:
+    check_mu(args)
+    if np.any(args.dF <= 0):
+        _fail("argument --dF: loads above F0_6 must be > 0 N for a boundary to exist.")
+
+
+def _check_critical_load(args) -> None:
+    if np.any(args.mu <= 0):
+        _fail("argument --mu: friction coefficients must be > 0 (no frictional boundary at mu = 0).")
+    _positive("--amplitude", args.amplitude, "(m/s, N/m or m)")
+    if args.max_dF <= MIN_DF_BRACKET:
+        _fail(f"argument --max-dF: {args.max_dF!r} is invalid: the bracket's top must be > its "
+              f"bottom, {MIN_DF_BRACKET:g} N.")
+
+
 def _check_simulate(args) -> None:
+    check_mu(args)
     _positive("--t1", args.t1, "s")
     if args.amplitude < 0:
         _fail(f"argument --amplitude: {args.amplitude!r} is invalid: expected >= 0.")

@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 import math
 
-from ._checks import MIN_DF_BRACKET
-from ._common import _fail, _rod_from_args, _write_rows, _plot_curve
+from ._common import _add_rod_options, _fail, _finite_float, _plot_curve, _positive_int, _range_spec, _rod_from_args, _rtol, _write_rows
+from ._checks import MIN_DF_BRACKET, _check_boundary, _check_critical_load
 
 
 def _cmd_boundary(args) -> int:
@@ -103,3 +103,42 @@ def _cmd_critical_load(args) -> int:
     print(f"fitted dF* ~ mu^p: p = {p:.3f} +/- {se:.3f} (single-mode theory: 2 for velocity, 1 for position)")
     return 0
 
+
+def register_boundary(sub) -> None:
+    """`jaxrod boundary`: its arguments, checks and command."""
+    bd = sub.add_parser("boundary", help="critical sine velocity v0*(dF) by root search")
+    bd.add_argument("--mu", type=_finite_float, default=0.3)
+    bd.add_argument("--dF", type=_range_spec, default="1:60:6", help="LO:HI:N loads above F0_6 [N], or a list A,B,C")
+    bd.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+                    help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
+    bd.add_argument("--n", type=_positive_int, default=None)
+    bd.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
+    bd.add_argument("--out", default=None, help="folder for boundary.csv and boundary.png")
+    bd.add_argument("--method", choices=["departure", "bisection"], default=None,
+                    help="rod models: departure-rate secant (default) or label bisection (default for rod3d)")
+    bd.add_argument("--json", action="store_true")
+    bd.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_rod_options(bd)
+    bd.set_defaults(func=_cmd_boundary, check=_check_boundary, all_cores=True)
+
+
+def register_critical_load(sub) -> None:
+    """`jaxrod critical-load`: its arguments, checks and command."""
+    cl = sub.add_parser("critical-load", help="critical load dF*(mu) by root search")
+    cl.add_argument("--mu", type=_range_spec, default="0.05:1:6", help="LO:HI:N friction coefficients, or a list A,B,C")
+    cl.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
+                    default="sine")
+    cl.add_argument("--amplitude", type=_finite_float, default=0.015,
+                    help="m/s for velocities, N/m for random-position, m for random-shape")
+    cl.add_argument("--realizations", type=_positive_int, default=1)
+    cl.add_argument("--seed", type=int, default=0)
+    cl.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+                    help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
+    cl.add_argument("--n", type=_positive_int, default=None)
+    cl.add_argument("--max-dF", dest="max_dF", type=_finite_float, default=100.0, help="bracket top [N]")
+    cl.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
+    cl.add_argument("--out", default=None)
+    cl.add_argument("--method", choices=["departure", "bisection"], default=None,
+                    help="rod models: departure-rate secant (default) or label bisection (default for rod3d)")
+    cl.add_argument("--json", action="store_true")
+    cl.set_defaults(func=_cmd_critical_load, check=_check_critical_load, all_cores=True)

@@ -16,3 +16,10 @@ def _cmd_figure(args) -> int:
             print(f"  {case:40s} simulated = analytic on {100 * frac:5.1f}% of the grid")
     return 0
 
+
+def register(sub) -> None:
+    """`jaxrod figure`: its arguments, checks and command."""
+    fg = sub.add_parser("figure", help="write a figure")
+    fg.add_argument("which", choices=["phase"], help="phase: E2 phase portraits")
+    fg.add_argument("--out", default="out/figures", help="output folder (default: out/figures under the working folder)")
+    fg.set_defaults(func=_cmd_figure)

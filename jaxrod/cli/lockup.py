@@ -5,6 +5,9 @@ from __future__ import annotations
 import json
 import math
 import os
+from ._checks import _check_lockup
+from ._common import _finite_float, _positive_int
+
 
 def _cmd_lockup(args) -> int:
     import jax
@@ -126,3 +129,27 @@ def _plot(r, summary, path):
     fig.suptitle(f"muL/ell = {summary['mu_L_over_ell']:g}, r/ell = {summary['r_over_ell']:g}, mu = {summary['mu']:g}, "
                  f"far load {summary['far_load_over_F0']:g} F0, {1e3 * summary['speed']:g} mm/s")
     fig.savefig(path, dpi=110)
+
+
+def register(sub) -> None:
+    """`jaxrod lockup`: its arguments, checks and command."""
+    lk = sub.add_parser("lockup", help="one rod injected into a long channel against a far-end load (the 3D rod; "
+                        "docs/physics.md section 8)")
+    lk.add_argument("--mu-L", dest="mu_L", type=_finite_float, default=1.0, help="muL/ell (default 1)")
+    lk.add_argument("--r-over-ell", type=_finite_float, default=0.02, help="clearance r/ell (default 0.02)")
+    lk.add_argument("--mu", type=_finite_float, default=0.5, help="friction coefficient (default 0.5)")
+    lk.add_argument("--far-load", type=_finite_float, default=2.5, help="far-end load in units of F0 (default 2.5)")
+    lk.add_argument("--speed", type=_finite_float, default=5e-3, help="injection speed [m/s] (default 5e-3)")
+    lk.add_argument("--push", type=_finite_float, default=0.3, help="how far the entry is pushed [m] (default 0.3)")
+    lk.add_argument("--damping", type=_finite_float, default=20.0,
+                    help="mass-proportional damping [1/s] that takes out the start's axial wave (default 20)")
+    lk.add_argument("--unload", action="store_true", help="then pull the entry back as far")
+    lk.add_argument("--n", type=_positive_int, default=None, help="segments (default: 16 per buckle wavelength)")
+    lk.add_argument("--scheme", choices=["implicit", "leapfrog"], default="implicit",
+                    help="time stepping: the implicit leapfrog at its own step (default) or the explicit one "
+                         "at 0.3 of its limit")
+    lk.add_argument("--n-save", type=_positive_int, default=201, help="saves per phase (default 201)")
+    lk.add_argument("--out", default="out/lockup", help="output folder (default: out/lockup under the working folder)")
+    lk.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    lk.add_argument("--quiet", action="store_true")
+    lk.set_defaults(func=_cmd_lockup, check=_check_lockup)

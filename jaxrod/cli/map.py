@@ -4,21 +4,17 @@ from __future__ import annotations
 
 import math
 
-from ._common import _fail
+from ._common import _fail, _finite_float, _positive_int, _range_spec
+from ._checks import _check_map
+from ._distributed import _add_distributed_options
 
 
 def _cmd_map(args) -> int:
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    import numpy as np
-
     from ..stability_map import stability_map
 
-    if args.mu is not None and args.mu < 0:
-        _fail(f"argument --mu: {args.mu!r} is invalid: a friction coefficient must be >= 0.")
-    if np.any(args.v0 <= 0):
-        _fail(f"argument --v0: velocities must be > 0 m/s, got {float(args.v0.min())!r}.")
     mus = (0.3, 0.0) if args.mu is None else (args.mu,)
     main = jax.process_index() == 0  # on several processes, process 0 reports
     if main:
@@ -55,3 +51,21 @@ def _cmd_map(args) -> int:
         print("    largest stable dF/F0cr seen: " + (f"{largest:.2f}" if largest is not None else "none (buckles everywhere)"))
     return 0
 
+
+def register(sub) -> None:
+    """`jaxrod map`: its arguments, checks and command."""
+    mp = sub.add_parser("map", help="E3 stability map over (dF, v0): the main job")
+    mp.add_argument("--mu", type=_finite_float, default=None,
+                    help="friction coefficient (default: 0.3 and, in the same figure, 0)")
+    mp.add_argument("--dF", type=_range_spec, default="0.5:64:20", help="LO:HI:N loads above F0_6 [N] (log-spaced), or a list A,B,C")
+    mp.add_argument("--v0", type=_range_spec, default="0.001:0.2:24", help="LO:HI:N sine amplitudes [m/s] (log-spaced), or a list A,B,C")
+    mp.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+                    help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
+    mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
+    mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
+    mp.add_argument("--out", default="out/map", help="output folder (default: out/map under the working folder)")
+    mp.add_argument("--quiet", action="store_true", help="no progress bar")
+    mp.add_argument("--no-curve", dest="no_curve", action="store_true",
+                    help="do not search the boundary at every load (drawn over the grid, rtol 1e-3)")
+    _add_distributed_options(mp)
+    mp.set_defaults(func=_cmd_map, check=_check_map, all_cores=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._common import _fail
+from ._common import _fail, _positive_int
 
 
 def _cmd_reproduce(args) -> int:
@@ -20,3 +20,18 @@ def _cmd_reproduce(args) -> int:
         print(f"  {name}: {r.get('seconds', '?')} s")
     return 0
 
+
+def register(sub) -> None:
+    """`jaxrod reproduce`: its arguments, checks and command."""
+    rp = sub.add_parser("reproduce", help="reproduce the paper's experiments E1-E6 (E1 and E6's full-model part with the 3D rod) "
+                        "and the post-buckling helix/hysteresis experiment ('all'); lock-up by name")
+    rp.add_argument("which", nargs="+", choices=["e1", "e2", "e3", "e4", "e5", "e6", "helix", "lockup", "all"])
+    rp.add_argument("--out", default="out/paper", help="output folder (default: out/paper under the working folder; "
+                    "the committed reproduction is results/paper)")
+    rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
+    rp.add_argument("--model", choices=["field", "rod3d"], default="field",
+                    help="rod3d: E3, E4, E5 and E6C with the 3D rod "
+                         "(jaxrod.experiments.paper3d; hours at 500 segments)")
+    rp.add_argument("--n", type=_positive_int, default=None, help="segments of the 3D rod (default 500; 60 with --quick)")
+    rp.add_argument("--quiet", action="store_true")
+    rp.set_defaults(func=_cmd_reproduce, all_cores=True)

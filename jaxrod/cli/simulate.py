@@ -5,7 +5,8 @@ from __future__ import annotations
 import json
 import os
 
-from ._common import _fail, _json_number, _rod_from_args
+from ._common import _add_rod_options, _fail, _finite_float, _json_number, _positive_int, _rod_from_args
+from ._checks import _check_simulate
 
 
 def _cmd_simulate(args) -> int:
@@ -147,3 +148,35 @@ def _simulate_rod3d(args, rod) -> int:
               f"result: {out['result']}")
     return 0 if int(sol.result) == 0 else 1
 
+
+def register(sub) -> None:
+    """`jaxrod simulate`: its arguments, checks and command."""
+    sm = sub.add_parser("simulate", help="simulate one perturbed rod")
+    sm.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+                    help="rod3d: the full 3D rod (jaxrod.rod3d); auto: the cheapest adequate model, "
+                         "from the measured table (jaxrod.model_choice)")
+    sm.add_argument("--control", choices=["force", "load", "displacement"], default=None,
+                    help="rod3d only: ends held after pre-compression (force, the default), dead end load (load), "
+                         "or one end pushed at --speed from zero load (displacement)")
+    sm.add_argument("--speed", type=_finite_float, default=None,
+                    help="rod3d displacement control only: pushing speed [m/s] (default 1e-3)")
+    sm.add_argument("--dF", type=_finite_float, default=5.0, help="load above F0_m* [N] (default 5)")
+    sm.add_argument("--mu", type=_finite_float, default=0.3, help="friction coefficient (default 0.3)")
+    sm.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
+                    default="sine")
+    sm.add_argument("--amplitude", type=_finite_float, default=0.02,
+                    help="m/s (sine, random-velocity); N/m force for 1 ms (random-position); "
+                         "m (random-shape); default 0.02")
+    sm.add_argument("--mode", type=_positive_int, default=6, help="sine / single mode number (default 6)")
+    sm.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sm.add_argument("--n", type=_positive_int, default=None, help="nodes (field; default 128, 384 past 32 unstable modes) or modes (galerkin, 32)")
+    sm.add_argument("--dt", type=_finite_float, default=None, help="time step [s] (default: 0.4 of the limit)")
+    sm.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
+    sm.add_argument("--n-save", dest="n_save", type=_positive_int, default=2001, help="saved times (default 2001)")
+    sm.add_argument("--json", action="store_true", help="print one JSON object")
+    sm.add_argument("--plot", default=None, help="write theta(s,t) and the modal spectrum to this PNG")
+    sm.add_argument("--export", default=None, metavar="DIR",
+                    help="rod3d: write a ParaView time series (DIR/rod.pvd, one .vtu per save) and DIR/rod.gif")
+    sm.add_argument("--quiet", action="store_true", help="no progress bar (rod3d runs)")
+    _add_rod_options(sm)
+    sm.set_defaults(func=_cmd_simulate, check=_check_simulate)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import json
 import math
 
-from ._common import _rod_from_args, _json_number
+from ._common import _add_rod_options, _finite_float, _json_number, _rod_from_args
+from ._checks import _check_theory
 
 
 def _cmd_theory(args) -> int:
@@ -63,3 +64,13 @@ def _cmd_theory(args) -> int:
             print("  k >= 0: the mode is stable for any perturbation (no finite intercept)")
     return 0
 
+
+def register(sub) -> None:
+    """`jaxrod theory`: its arguments, checks and command."""
+    t = sub.add_parser("theory", help="analytic loads and stable-zone intercepts (docs/physics.md P3-P7)")
+    t.add_argument("--mu", type=_finite_float, default=0.3, help="friction coefficient (default 0.3)")
+    t.add_argument("--dF", type=_finite_float, default=None, help="load above F0_m [N]")
+    t.add_argument("--mode", type=int, default=None, help="mode m (default: the critical mode)")
+    t.add_argument("--json", action="store_true", help="print one JSON object")
+    _add_rod_options(t)
+    t.set_defaults(func=_cmd_theory, check=_check_theory)
