@@ -75,11 +75,12 @@ def _jobs(S, out):
     conv = S.get("converge")
     for Lx, Xs, lock in S["groups"]:
         for k, run in enumerate(S["runs"]):
+            xs, lk = Xs, lock
             if k > 0 and conv is not None:
-                Xs, lock = tuple(X for X in Xs if X in conv), (lock if "lock" in conv else None)
-                if not Xs and lock is None:
+                xs, lk = tuple(X for X in Xs if X in conv), (lock if "lock" in conv else None)
+                if not xs and lk is None:
                     continue
-            yield (Lx, Xs, lock), run, os.path.join(out, "jobs", f"L{Lx:g}_w{run[0]}_v{1e3 * run[1]:g}.json")
+            yield (Lx, xs, lk), run, os.path.join(out, "jobs", f"L{Lx:g}_w{run[0]}_v{1e3 * run[1]:g}.json")
 
 
 def _job(args):
@@ -93,17 +94,13 @@ def _job(args):
     (Lx, Xs, X_lock0), (per_wave, speed), S, path, progress = args
     rod = push_rod(Lx, R_OVER_ELL, 1.0)  # μ = 1 gives L = (L/ℓ) ℓ; each lane sets its own μ
     n = max(8, math.ceil(per_wave * float(rod.L) / _wave(rod)))
-    mus = [X / Lx for X in Xs] + ([1.0] if X_lock0 is not None else [])
-    if X_lock0 not in (None, "auto"):
-        mus[-1] = X_lock0 / Lx
-    starts = [max(0.7 * min(v["far_at_fc"] for v in _closed(rod, X, S["f_c"]).values()), 0.1) for X in Xs]
-    starts += [0.0] if X_lock0 is not None else []
-    if X_lock0 is None:
-        pass
-    elif X_lock0 == "auto":  # 0.8 × the smallest soft-string μL_lock(f_c)/ℓ
+    if X_lock0 == "auto":  # 0.8 × the smallest soft-string μL_lock(f_c)/ℓ
         X_lock0 = 0.8 * min(v["lock_at_fc"] for v in _closed(rod, 1.0, S["f_c"]).values())
-        mus[-1] = X_lock0 / Lx
-    vary = [False] * len(Xs) + ([True] if X_lock0 is not None else [])
+    locks = [] if X_lock0 is None else [X_lock0]
+    mus = [X / Lx for X in (*Xs, *locks)]
+    starts = [max(0.7 * min(v["far_at_fc"] for v in _closed(rod, X, S["f_c"]).values()), 0.1) for X in Xs]
+    starts += [0.0] * len(locks)
+    vary = [False] * len(Xs) + [True] * len(locks)
     t = time.time()
     res = staircase(rod, mus, starts, speed, f_c=S["f_c"], vary_mu=vary, n=n, first_push=S["first_push"],
                     stage_push=S["stage_push"], max_stages=S["max_stages"], saves_per_stage=S["saves_per_stage"],

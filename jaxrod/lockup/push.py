@@ -36,7 +36,7 @@ from ..rod3d import Rod3D, step_limit
 from ..simulate import simulate
 from .closed_forms import force_unit, length_unit
 
-__all__ = ["push_rod", "push_model", "push", "inject", "inject_lanes", "lane", "locked", "extents", "units", "SEGMENTS_PER_WAVE"]
+__all__ = ["push_rod", "push_model", "push", "inject", "inject_lanes", "lane_models", "lane", "locked", "extents", "units", "SEGMENTS_PER_WAVE"]
 
 SEGMENTS_PER_WAVE = 16
 """Default resolution: segments per buckle wavelength at the sinusoidal onset, 2π√(ℓr) (§3). A
@@ -272,11 +272,7 @@ def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float,
     F0, ell = units(rod)
     cap = ell / float(rod.R) if cap is None else _check("cap", cap, 0.0, False)
 
-    def model(mu, F):
-        r = eqx.tree_at(lambda r: (r.mu_s, r.mu_d), rod, (mu, mu))
-        return Rod3D(r, n, control="displacement", speed=speed, far_load=F, ends="pinned", **rod3d)
-
-    models = eqx.filter_vmap(model)(jnp.asarray(mus), jnp.asarray(far_loads))
+    models = lane_models(rod, n, speed, mus, far_loads, **rod3d)
     chunks = max(1, int(chunks))
     held_from = np.full(mus.shape, np.inf)
 
@@ -292,6 +288,17 @@ def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float,
     rec["phase"] = np.zeros_like(rec["phase"])  # one loading phase, run in parts
     rec.update(mu=mus, held_from=held_from, scheme=scheme)
     return _forces(rec, rec["reaction"][..., 1], far_loads[:, None] * np.ones(len(rec["t"])))
+
+
+def lane_models(rod: RodChannel, n: int, speed: float, mus, far_loads, **rod3d) -> Rod3D:
+    """The injection scene's rods as one batch (a leading lane axis on every leaf): lane k is
+    `rod` with μ_s = μ_d = `mus[k]`, its entry pushed at `speed` [m/s], its far end against
+    `far_loads[k]` [N]; `n` segments, other keywords to [`jaxrod.rod3d.Rod3D`][]."""
+    def model(mu, F):
+        r = eqx.tree_at(lambda r: (r.mu_s, r.mu_d), rod, (mu, mu))
+        return Rod3D(r, n, control="displacement", speed=speed, far_load=F, ends="pinned", **rod3d)
+
+    return eqx.filter_vmap(model)(jnp.asarray(mus), jnp.asarray(far_loads))
 
 
 def lane(rec: dict, k: int) -> dict:

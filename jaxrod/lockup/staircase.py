@@ -38,14 +38,12 @@ from __future__ import annotations
 
 import math
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..integrators.base import RunOptions
-from ..rod3d import Rod3D
-from .push import _check, _run_lanes, _start, _wave, extents, units
+from .push import _check, _run_lanes, _start, _wave, extents, lane_models, units
 from .verdict import LOCKED, SLIDING, TRANSIENT, Criterion, verdict
 
 __all__ = ["staircase", "BRACKETED", "WIDE", "BELOW_START"]
@@ -111,11 +109,6 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     L, r = float(rod.L), float(rod.R)
     l0 = L / n
     s_nodes, wave = np.arange(n + 1) * l0, _wave(rod)
-    X_of = lambda mu: mu * L / ell  # noqa: E731
-
-    def model(mu, F):
-        rr = eqx.tree_at(lambda r: (r.mu_s, r.mu_d), rod, (mu, mu))
-        return Rod3D(rr, n, control="displacement", speed=speed, far_load=F, ends="pinned", **rod3d)
 
     mu_now, far_now = mus.copy(), far_loads.copy()
     pushing = np.ones(mus.shape, bool)
@@ -126,7 +119,7 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     x0 = np.asarray(q0.x[:, 0])
     for stage in range(max_stages):
         active = np.flatnonzero(pushing)  # a stopped lane leaves the batch
-        models = eqx.filter_vmap(model)(jnp.asarray(mu_now[active]), jnp.asarray(far_now[active] * F0))
+        models = lane_models(rod, n, speed, mu_now[active], far_now[active] * F0, **rod3d)
         duration = (first_push if stage == 0 else stage_push) / speed
         take = lambda a: a[active]  # noqa: E731
         sol = _run_lanes(models, jax.tree_util.tree_map(take, q), jax.tree_util.tree_map(take, v), dt, duration,
@@ -136,7 +129,8 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
         xs = np.zeros((mus.size,) + sol.q.x.shape[1:-1])
         xs[active] = np.asarray(sol.q.x[..., 0])  # (lanes, saves, n + 1)
         obs = {}
-        for name, a in sol.observables.items():
+        for name in ("reaction", "theta", "normal_force", "axial_force"):  # what the stages read
+            a = sol.observables[name]
             obs[name] = np.zeros((mus.size,) + a.shape[1:])
             obs[name][active] = np.asarray(a)
         for k, lane in enumerate(lanes):
@@ -181,4 +175,4 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
         lane.pop("steady")
     return dict(lanes=lanes, F0=F0, ell=ell, n=n, dt=dt, l0=l0, r=r, L_over_ell=L / ell, f_c=f_c, speed=speed,
                 mus=mus, far_loads=far_loads, vary_mu=vary_mu, scheme=scheme,
-                X=[X_of(m) for m in mus])
+                X=mus * L / ell)
