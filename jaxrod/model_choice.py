@@ -4,13 +4,19 @@ from __future__ import annotations
 
 import math
 
-from .scene import PERTURBATIONS
 
 __all__ = ["choose_model"]
 
 # Thresholds of the rule, from benchmarks/results/model_choice.csv (reference rod).
 SINGLE_MODE_MAX_DF = 1.0  # N: sine perturbations, single mode 0.17 % off at 1 N, 5.5 % at 5 N
 FINE_FIELD_DF = 20.0  # N: past it more than 32 modes are unstable and 128 nodes no longer suffice
+# perturbation: ((the largest ΔF [N] the row holds for, model, n), ...), the first row that holds
+RULES = {
+    "sine": ((SINGLE_MODE_MAX_DF, "mode", None), (FINE_FIELD_DF, "field", 128), (math.inf, "field", 384)),
+    "random-position": ((math.inf, "field", 384),),
+    "random-velocity": ((math.inf, "field", 768),),
+    "random-shape": ((math.inf, "field", 768),),  # not measured: a white-noise state, as the random velocity
+}
 
 
 def choose_model(perturbation: str, dF: float, mu: float) -> tuple[str, int | None]:
@@ -49,7 +55,7 @@ def choose_model(perturbation: str, dF: float, mu: float) -> tuple[str, int | No
 
     **Arguments:**
 
-    - `perturbation`: one of `jaxrod.scene.PERTURBATIONS`.
+    - `perturbation`: a perturbation name with a measured rule (`RULES`).
     - `dF`: the largest load above F⁰_m* the computation meets [N] (for a critical-load
       search: the top of its bracket).
     - `mu`: the (largest) friction coefficient, ≥ 0.
@@ -60,16 +66,10 @@ def choose_model(perturbation: str, dF: float, mu: float) -> tuple[str, int | No
     **Raises:** `ValueError` for an unknown perturbation, a non-finite `dF` or a negative or
     non-finite `mu`.
     """
-    if perturbation not in PERTURBATIONS:
-        raise ValueError(f"perturbation = {perturbation!r} is invalid: expected one of {PERTURBATIONS}.")
+    if perturbation not in RULES:
+        raise ValueError(f"perturbation = {perturbation!r} is invalid: expected one of {tuple(RULES)} (those measured).")
     if not math.isfinite(dF):
         raise ValueError(f"dF = {dF!r} is invalid: expected a finite load [N].")
     if not (math.isfinite(mu) and mu >= 0):
         raise ValueError(f"mu = {mu!r} is invalid: expected a finite friction coefficient >= 0.")
-    if perturbation == "sine":
-        if dF <= SINGLE_MODE_MAX_DF:
-            return "mode", None
-        return "field", 128 if dF <= FINE_FIELD_DF else 384
-    if perturbation == "random-position":
-        return "field", 384
-    return "field", 768
+    return next((model, n) for top, model, n in RULES[perturbation] if dF <= top)

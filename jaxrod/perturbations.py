@@ -20,6 +20,7 @@ noise.
 from __future__ import annotations
 
 import abc
+import warnings
 from typing import ClassVar
 
 import equinox as eqx
@@ -90,6 +91,21 @@ class AbstractPerturbation(eqx.Module):
     # answers (docs/rod3d.md, "The implicit step"): E3's sine velocity yes; the random ones moved E4's
     # ΔF* by 2–23 % at its step, so a 3D scene with them runs the explicit leapfrog (`Scene.scheme`)
     implicit_3d: ClassVar[bool] = False
+    # whether the single mode's exact solution answers a boundary search under it (a sine
+    # velocity of the mode: `search_method = "exact"`)
+    projects_exactly: ClassVar[bool] = False
+
+    @classmethod
+    @abc.abstractmethod
+    def from_settings(cls, amplitude, mode: int, key, duration) -> AbstractPerturbation:
+        """The perturbation from a scene's plain settings: `amplitude` (its unit), the sine
+        `mode`, a random `key`, a forcing `duration` [s] (each takes what it uses)."""
+
+    @property
+    def least_nodes(self) -> int:
+        """Field nodes a model needs to resolve this perturbation (a scene's field model takes
+        at least this many): none by default."""
+        return 0
 
     @abc.abstractmethod
     def fields(self, model: AbstractModel) -> tuple[Float[Array, " n"], Float[Array, " n"]]:
@@ -99,22 +115,46 @@ class AbstractPerturbation(eqx.Module):
         """(q₀, v₀) in the model's coordinates (`model.perturbed_state` of the fields)."""
         return model.perturbed_state(*self.fields(model))
 
+    def modal_state(self, mode: int, R, grid):
+        """(A₀, Ȧ₀) of sine mode `mode` [rad, rad/s] of a rod of clearance `R` [m]: the state this
+        perturbation gives the field model of `grid()` (a model and its integrator), projected
+        onto the mode."""
+        model, integrator = grid()
+        q, v = self.initial_state(model, integrator)
+        return project_to_mode(q, mode), project_to_mode(v, mode)
+
 
 class SineVelocity(AbstractPerturbation):
-    """Lateral velocity v(s) = `v0`·sin(`mode`·πs/L) [m/s] on a straight rod.
+    """Lateral velocity v(s) = `amplitude`·sin(`mode`·πs/L) [m/s] on a straight rod.
 
-    `v0` [m/s] and `mode` (≥ 1) are dynamic leaves.
+    `amplitude` (v₀ [m/s]) and `mode` (≥ 1) are dynamic leaves. `v0` is a deprecated alias of
+    `amplitude`.
     """
 
     implicit_3d: ClassVar[bool] = True
+    projects_exactly: ClassVar[bool] = True
 
-    v0: Float[Array, ""] = eqx.field(converter=_f)
+    amplitude: Float[Array, ""] = eqx.field(converter=_f)
     mode: Float[Array, ""] = eqx.field(converter=_f, default=6.0)
+
+    @property
+    def v0(self):
+        warnings.warn("SineVelocity.v0 is deprecated: use SineVelocity.amplitude.", DeprecationWarning, stacklevel=2)
+        return self.amplitude
+
+    @classmethod
+    def from_settings(cls, amplitude, mode, key, duration):
+        return cls(amplitude, float(mode))
 
     def fields(self, model):
         s = model.sample_points()
-        v = self.v0 * jnp.sin(self.mode * jnp.pi * s / model.rod.L)
+        v = self.amplitude * jnp.sin(self.mode * jnp.pi * s / model.rod.L)
         return jnp.zeros_like(s), v
+
+    def modal_state(self, mode, R, grid):
+        """Exact: a sine velocity field projects onto its own mode only."""
+        v = jnp.where(self.mode == mode, self.amplitude / R, 0.0)
+        return jnp.zeros_like(v), v
 
 
 class RandomVelocity(AbstractPerturbation):
@@ -125,6 +165,16 @@ class RandomVelocity(AbstractPerturbation):
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
     grid: int | None = eqx.field(static=True, default=GRID)
+
+    @classmethod
+    def from_settings(cls, amplitude, mode, key, duration):
+        return cls(amplitude, key)
+
+    @property
+    def least_nodes(self) -> int:
+        """grid − 1: its high modes decide the result (their vibration releases static friction;
+        docs/glossary.md and benchmarks/README.md, "Which model for which scene")."""
+        return 0 if self.grid is None else self.grid - 1
 
     def fields(self, model):
         s = model.sample_points()
@@ -139,6 +189,16 @@ class RandomShape(AbstractPerturbation):
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
     grid: int | None = eqx.field(static=True, default=GRID)
+
+    @classmethod
+    def from_settings(cls, amplitude, mode, key, duration):
+        return cls(amplitude, key)
+
+    @property
+    def least_nodes(self) -> int:
+        """grid − 1: its high modes decide the result (their vibration releases static friction;
+        docs/glossary.md and benchmarks/README.md, "Which model for which scene")."""
+        return 0 if self.grid is None else self.grid - 1
 
     def fields(self, model):
         s = model.sample_points()
@@ -159,6 +219,10 @@ class RandomForce(AbstractPerturbation):
     key: PRNGKeyArray
     duration: Float[Array, ""] = eqx.field(converter=_f, default=1e-3)
     grid: int | None = eqx.field(static=True, default=GRID)
+
+    @classmethod
+    def from_settings(cls, amplitude, mode, key, duration):
+        return cls(amplitude, key, duration)
 
     def fields(self, model):
         s = model.sample_points()
@@ -195,6 +259,10 @@ class UserState(AbstractPerturbation):
 
     q0: Float[Array, " n"] = eqx.field(converter=_f)
     v0: Float[Array, " n"] = eqx.field(converter=_f)
+
+    @classmethod
+    def from_settings(cls, amplitude, mode, key, duration):
+        raise TypeError("UserState is given as a state, not from a scene's settings.")
 
     def fields(self, model):
         return self.q0 * model.rod.R, self.v0 * model.rod.R

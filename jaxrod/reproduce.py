@@ -56,20 +56,24 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
     import jax
 
     which = [which] if isinstance(which, str) else list(which)
-    if model not in ("field", "rod3d"):
-        raise ValueError(f"model = {model!r} is invalid: expected 'field' or 'rod3d'.")
+    # the experiments each model reproduces: (their names, their runners, the suffix of their entries, "all")
+    sets = {"field": (lambda: EXPERIMENTS, _runners, "", True),
+            "rod3d": (lambda: tuple(_runners_3d(n)), lambda: _runners_3d(n), "_rod3d", False)}
+    if model not in sets:
+        raise ValueError(f"model = {model!r} is invalid: expected one of {tuple(sets)}.")
     if n is not None and not (isinstance(n, int) and n >= 4):
         raise ValueError(f"n = {n!r} is invalid: expected an int >= 4 (segments of the 3D rod).")
+    allowed_of, runners, suffix, paper = sets[model]  # paper: whether "all" (the paper's) is offered
+    allowed = allowed_of()
     names = tuple(dict.fromkeys(x for w in which for x in (PAPER if w == "all" else (w,))))  # "all" and others
-    allowed = EXPERIMENTS if model == "field" else tuple(_runners_3d(n))
     bad = [w for w in names if w not in allowed]
     if bad:
         raise ValueError(f"unknown experiment(s) {bad} for model {model!r}: expected {allowed}"
-                         + (" or 'all'." if model == "field" else "."))
+                         + (" or 'all'." if paper else "."))
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, "results.json")
     results = {}
-    fns = _runners() if model == "field" else _runners_3d(n)
+    fns = runners()
     for name in names:
         sub = os.path.join(out, name)
         os.makedirs(sub, exist_ok=True)
@@ -81,7 +85,7 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
         r["quick"] = quick
         r["jax"] = jax.__version__
         r["devices"] = jax.local_device_count()
-        entry = name if model == "field" else f"{name}_rod3d"
+        entry = name + suffix
         results[entry] = r
         # merge into what is on disk now (another run may have written other experiments since)
         on_disk = json.load(open(path)) if os.path.exists(path) else {}

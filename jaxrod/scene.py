@@ -14,69 +14,28 @@ from jaxtyping import Array, Float
 from . import theory
 from .integrators import AbstractFixedStep, ProjectedVerlet, default_for
 from .integrators.base import RunOptions
-from .models import FieldModel, GalerkinModel, SingleMode
+from .models.dof import DT_FRACTION
+from .models.field import DEFAULT_NODES, FieldModel, default_nodes
+from .models.galerkin import DEFAULT_MODES
 from .params import RodChannel
-from .perturbations import (
-    AbstractPerturbation,
-    RandomForce,
-    RandomShape,
-    RandomVelocity,
-    SineVelocity,
-    project_to_mode,
-)
+from .perturbations import AbstractPerturbation, SineVelocity
+from .registry import make_perturbation, model_class, model_names, perturbation_names
 from .simulate import simulate
 
-__all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1"]
+__all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1", "make_perturbation",
+           "default_nodes", "scheme_for", "dominant_mode_of"]
 
-MODELS = ("mode", "galerkin", "field", "rod3d")
-PERTURBATIONS = ("sine", "random-velocity", "random-position", "random-shape")
-DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence) and `default_nodes`
-DEFAULT_MODES = 32
+# the built-in names (`jaxrod.registry.model_names()` and `perturbation_names()` include any registered since)
+MODELS = model_names()
+PERTURBATIONS = perturbation_names()
 DEFAULT_SEGMENTS = 60  # the 3D rod, as E1 and E6 (docs/rod3d.md)
 DEFAULT_T1 = 2.0  # s, as the reference paper
-DT_FRACTION = 0.4  # of the explicit step limit
-SINGLE_MODE_DT = 1e-4  # s
-GROWTH_FRACTION = 0.25  # of 1/λ_max
 
 
 def _f(x):
     if isinstance(x, (int, float)):
         return jnp.asarray(x, dtype=jnp.result_type(float))
     return jnp.asarray(x)
-
-
-def default_nodes(rod: RodChannel, F) -> int:
-    """The field model's default node count for the load `F` [N] (concrete), from the
-    convergence study in `benchmarks/field_convergence.py`: the critical sine velocity is within
-    1 % of its converged value with 128 nodes while at most 32 modes are unstable
-    (m_max = (L/π)√(F/EI) ≤ 32, ΔF ≲ 20 N for the reference rod), and needs 384 beyond (measured
-    at ΔF = 60 N: 2.3 % off with 128 nodes, 1.1 % with 256, 0.35 % with 384)."""
-    import math
-
-    with jax.ensure_compile_time_eval():
-        m_max = float(rod.L / math.pi * jnp.sqrt(jnp.maximum(F, 0.0) / rod.EI))
-    return DEFAULT_NODES if m_max <= 32 else 384
-
-
-def make_perturbation(kind: str, amplitude, mode: int = 6, key=None, duration=1e-3):
-    """A perturbation of `kind`:
-
-    - `"sine"`: lateral velocity `amplitude`·sin(`mode`·πs/L) [m/s];
-    - `"random-velocity"`: uniform in ±`amplitude` [m/s] at every point;
-    - `"random-position"`: random forces ±`amplitude` [N/m] for `duration` [s], then released
-      from rest (the reference paper's position perturbation);
-    - `"random-shape"`: random lateral displacement ±`amplitude` [m], from rest.
-    """
-    if kind not in PERTURBATIONS:
-        raise ValueError(f"perturbation = {kind!r} is invalid: expected one of {PERTURBATIONS}.")
-    if kind == "sine":
-        return SineVelocity(amplitude, float(mode))
-    key = jax.random.key(0) if key is None else key
-    if kind == "random-velocity":
-        return RandomVelocity(amplitude, key)
-    if kind == "random-position":
-        return RandomForce(amplitude, key, duration)
-    return RandomShape(amplitude, key)
 
 
 class Scene(eqx.Module):
@@ -113,14 +72,19 @@ class Scene(eqx.Module):
     grid_dt: float | None = eqx.field(static=True, default=None)
 
     def __check_init__(self):
-        if self.kind not in MODELS:
-            raise ValueError(f"model = {self.kind!r} is invalid: expected one of {MODELS}.")
+        cls = model_class(self.kind)
         if not (isinstance(self.mode, int) and self.mode >= 1):
             raise ValueError(f"mode = {self.mode!r} is invalid: expected an int >= 1.")
-        if self.n is not None and not (isinstance(self.n, int) and self.n >= (1 if self.kind == "galerkin" else 4)):
-            raise ValueError(f"n = {self.n!r} is invalid for the {self.kind} model.")
+        if self.n is not None and not (isinstance(self.n, int) and self.n >= cls.min_size):
+            raise ValueError(f"n = {self.n!r} is invalid for the {self.kind} model: expected an int >= "
+                             f"{cls.min_size} ({cls.size_name}).")
         if self.dt is not None and not (isinstance(self.dt, (int, float)) and self.dt > 0):
             raise ValueError(f"dt = {self.dt!r} is invalid: expected a float > 0 [s].")
+
+    @property
+    def model_class(self):
+        """The class of the scene's model (`jaxrod.registry.model_class(kind)`)."""
+        return model_class(self.kind)
 
     @property
     def F(self) -> Float[Array, ""]:
@@ -128,113 +92,66 @@ class Scene(eqx.Module):
         return theory.reference_load(self.rod) + self.dF
 
     def model(self):
-        if self.kind == "mode":
-            return SingleMode.from_rod(self.rod, self.mode, F=self.F)
-        if self.kind == "galerkin":
-            return GalerkinModel.from_rod(self.rod, self.n or DEFAULT_MODES, F=self.F)
-        if self.kind == "rod3d":
-            from .rod3d import Rod3D
-
-            return Rod3D(self.rod, self.size(), control="load", end_load=self.F)
-        return FieldModel.from_rod(self.rod, self.nodes(), F=self.F)
+        """The model of `kind` at the load F and `size()` (`AbstractModel.for_scene`)."""
+        return self.model_class.for_scene(self.rod, self.F, self.size(), self.mode)
 
     def size(self) -> int | None:
-        """The model's static size: field nodes, Galerkin modes, 3D segments (`None`: one mode)."""
-        if self.kind == "field":
-            return self.nodes()
-        if self.kind == "galerkin":
-            return self.n or DEFAULT_MODES
-        if self.kind == "rod3d":
-            return self.n or DEFAULT_SEGMENTS
-        return None
-
-    def nodes(self) -> int:
-        """Field nodes: `n`, or `default_nodes` of the (concrete) load — at least the grid − 1
-        interior nodes of a random velocity or shape, whose high modes decide the result (their
-        vibration releases static friction: measured at μ = 0.3, ΔF* of a ±15 mm/s random
-        velocity is 17.95, 14.87, 12.95, 13.04, 13.10 N with 128, 256, 499, 640, 768 nodes)."""
+        """The model's static size (field nodes, Galerkin modes, 3D segments; `None`: one mode):
+        `n`, or the model's `default_size` at the (concrete) load under the perturbation."""
         if self.n is not None:
             return self.n
-        grid = getattr(self.perturbation, "grid", None)
-        least = grid - 1 if grid is not None and isinstance(self.perturbation, (RandomVelocity, RandomShape)) else 0
         try:
-            return max(default_nodes(self.rod, self.F), least)
+            return self.model_class.default_size(self.rod, self.F, self.perturbation)
         except jax.errors.ConcretizationTypeError:
             raise ValueError(
                 "Scene.n must be given explicitly when the load is traced (e.g. vmapped over "
-                "dF): the node count is a static setting."
+                "dF): the size is a static setting."
             ) from None
 
-    def _grid_model(self):
-        return FieldModel.from_rod(self.rod, self.n_grid, F=self.F)
+    def nodes(self) -> int:
+        """The field model's nodes: `size()` of a field scene (deprecated name)."""
+        return self.size()
+
+    def _grid(self):
+        """The field model and integrator on which a field perturbation is drawn before it is
+        projected onto a model that takes none (the single mode)."""
+        grid = FieldModel.from_rod(self.rod, self.n_grid, F=self.F)
+        step = self.grid_dt or DT_FRACTION * 2.0 / _static_omega(grid)
+        return grid, ProjectedVerlet(step)
 
     def step(self) -> float:
-        """The fixed step [s], static, from the rod's concrete values: 0.4 of the stability limit
-        2/ω_max at ΔF = 0 (compression only lowers the highest frequency), and — when the load
-        is concrete — at most 0.25/λ_max, λ_max = F/(2√(EIρ)) the fastest growth rate of a
-        loaded rod, so that fast-growing modes stay accurately resolved (the convergence study
-        in benchmarks/README.md, field_convergence: v₀* within 0.1 % below 0.4 of the limit at n = 64)."""
+        """The fixed step [s], static, from the rod's concrete values: `dt`, or the model's
+        `scene_step` (the reduced rod models: 0.4 of the stability limit at ΔF = 0 and at most
+        0.25/λ_max; the single mode 1e-4 s; the 3D rod its scheme's default step)."""
         if self.dt is not None:
             return float(self.dt)
-        if self.kind == "mode":
-            return SINGLE_MODE_DT
-        if self.kind == "rod3d":
-            from .integrators import default_step
+        from .integrators import default_step
 
+        scheme = self.scheme()
+
+        def scheme_step(model):
             try:
-                return default_step(self.model(), scheme=self.scheme())
+                return default_step(model, scheme=scheme)
             except jax.errors.ConcretizationTypeError:
-                raise ValueError("Scene.dt must be given explicitly for the 3D rod when the rod or the load "
-                                 "is traced: the step is a static setting.") from None
-        unloaded = eqx.tree_at(lambda s: s.dF, self, jnp.zeros(()))
-        if self.kind == "field":
-            model = FieldModel.from_rod(self.rod, self.nodes(), F=unloaded.F)
-        else:
-            model = unloaded.model()
-        dt = DT_FRACTION * 2.0 / self._static_omega(model)
-        try:
-            with jax.ensure_compile_time_eval():
-                lam = float(self.F / (2 * jnp.sqrt(self.rod.EI * self.rod.rho)))
-        except jax.errors.ConcretizationTypeError:
-            return dt
-        return min(dt, GROWTH_FRACTION / lam) if lam > 0 else dt
+                raise ValueError(f"Scene.dt must be given explicitly for the {self.kind} model when the rod or the "
+                                 "load is traced: the step is a static setting.") from None
+
+        return self.model().scene_step(self.rod, self.F, scheme_step)
 
     def scheme(self) -> str | None:
         """The scheme of the scene's runs (a key of `jaxrod.integrators.SCHEMES`; `None`: the
-        model's own): the 3D rod runs its implicit default only under a perturbation measured
-        adequate for it (`AbstractPerturbation.implicit_3d`: the sine velocity), else the
-        explicit projected leapfrog."""
-        return scheme_for(self.kind, self.perturbation)
+        model's own): the model's `scheme_under` the perturbation (the 3D rod runs its implicit
+        default only under a perturbation measured adequate for it, `implicit_3d`)."""
+        return self.model_class.scheme_under(self.perturbation)
 
     def integrator(self) -> AbstractFixedStep:
-        """The run's integrator: the scene's scheme (`scheme`; `jaxrod.integrators.default_for`:
-        the implicit leapfrog for the 3D rod under a sine velocity, else the projected leapfrog;
-        projected Verlet for the reduced models) at `step()`."""
+        """The run's integrator: the scene's scheme (`scheme`; `jaxrod.integrators.default_for`)
+        at `step()`."""
         return default_for(self.model(), self.step(), self.scheme())
 
     def initial_state(self):
-        """(q₀, v₀) in the model's coordinates."""
-        model = self.model()
-        if self.kind != "mode":
-            return self.perturbation.initial_state(model, self.integrator())
-        if isinstance(self.perturbation, SineVelocity):
-            # a sine velocity field projects exactly onto its own mode
-            v = jnp.where(self.perturbation.mode == self.mode, self.perturbation.v0 / self.rod.R, 0.0)
-            return jnp.zeros_like(v), v
-        grid = self._grid_model()
-        step = self.grid_dt or DT_FRACTION * 2.0 / self._static_omega(grid)
-        q, v = self.perturbation.initial_state(grid, ProjectedVerlet(step))
-        return project_to_mode(q, self.mode), project_to_mode(v, self.mode)
-
-    def _static_omega(self, model) -> float:
-        try:
-            with jax.ensure_compile_time_eval():
-                return float(jnp.max(model.max_frequency()))
-        except jax.errors.ConcretizationTypeError:
-            raise ValueError(
-                "Scene.dt must be given explicitly when the rod's stiffness parameters are "
-                "traced (e.g. vmapped over EI, rho or R): the step is a static setting."
-            ) from None
+        """(q₀, v₀) in the model's coordinates (`AbstractModel.initial_state_under`)."""
+        return self.model().initial_state_under(self.perturbation, self.integrator(), self._grid)
 
     def run(self, t1: float = DEFAULT_T1, n_save: int = 201, save_state: bool = True, throw: bool = False):
         """Simulate the scene to `t1` [s]; returns a [`jaxrod.Solution`][]. The run stops when
@@ -248,39 +165,29 @@ class Scene(eqx.Module):
 
     def field_of(self, q):
         """θ on a grid of nodes for plots: (s [m], θ [rad]) from the model's coordinates."""
-        model = self.model()
-        if self.kind == "rod3d":
-            return jnp.linspace(0.0, self.rod.L, model.n + 1), model.theta(q.x)
-        if self.kind == "field":
-            return model.sample_points(), q
-        if self.kind == "galerkin":
-            return model.sample_points(), jax.vmap(model.field)(q) if q.ndim == 2 else model.field(q)
-        s = jnp.linspace(0.0, self.rod.L, 129)
-        shape = jnp.sin(self.mode * jnp.pi * s / self.rod.L)
-        return s, q[..., None] * shape if jnp.ndim(q) else q * shape
+        return self.model().field_of(q)
 
     def dominant_mode(self, q):
         """The dominant sine mode of the state `q` (the model's own mode for one mode)."""
-        return dominant_mode_of(self.kind, q, self.mode)
+        return self.model().dominant_mode(q)
+
+
+def _static_omega(model) -> float:
+    try:
+        with jax.ensure_compile_time_eval():
+            return float(jnp.max(model.max_frequency()))
+    except jax.errors.ConcretizationTypeError:
+        raise ValueError(
+            "Scene.dt must be given explicitly when the rod's stiffness parameters are "
+            "traced (e.g. vmapped over EI, rho or R): the step is a static setting."
+        ) from None
 
 
 def scheme_for(kind: str, perturbation) -> str | None:
-    """The scheme of a run of a model of `kind` under `perturbation` (see `Scene.scheme`)."""
-    if kind == "rod3d" and not type(perturbation).implicit_3d:
-        return "leapfrog"
-    return None
+    """The scheme of a run of the model registered as `kind` under `perturbation` (`Scene.scheme`)."""
+    return model_class(kind).scheme_under(perturbation)
 
 
-def dominant_mode_of(kind: str, q, mode: int = 6):
-    """The dominant sine mode of a state `q` of a model of `kind` (any leading axes): of θ at the
-    nodes (field, 3D rod), the largest modal amplitude (Galerkin), or `mode` (single mode)."""
-    from .modal import dominant_mode
-    from .rod3d.state import wall_angle
-
-    if kind == "field":
-        return dominant_mode(q)
-    if kind == "rod3d":
-        return dominant_mode(wall_angle(q.x)[..., 1:-1])
-    if kind == "galerkin":
-        return jnp.argmax(jnp.abs(q), axis=-1) + 1
-    return jnp.asarray(mode)
+def dominant_mode_of(model, q):
+    """The dominant sine mode of a state `q` of `model` (any leading axes): `model.dominant_mode`."""
+    return model.dominant_mode(q)

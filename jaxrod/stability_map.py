@@ -11,6 +11,7 @@ import numpy as np
 from . import theory
 from .output import subplots, write_csv
 from .params import RodChannel
+from .registry import model_class
 from .sweeps import SweepResult, SweepSpec, sweep
 
 __all__ = ["stability_map", "grid_boundary", "fit_power_law", "plot_maps"]
@@ -105,7 +106,7 @@ def stability_map(
         res = sweep(spec, {"dF": dF, "amplitude": v0}, path=path, progress=progress, chunk_size=chunk_size)
         results[mu] = res
         summary["maps"][f"{mu:g}"] = _summarise(res, dF, v0, float(mu))
-        if curve_rtol is not None and mu > 0 and model in ("field", "galerkin"):
+        if curve_rtol is not None and mu > 0 and model_class(model).search_method == "departure":
             summary["maps"][f"{mu:g}"].update(_searched(res, dF, float(mu), model, mode, t1, curve_rtol, progress))
     summary["n"] = results[mus[0]].meta["n"]
     summary["dt"] = results[mus[0]].meta["dt"]

@@ -155,7 +155,7 @@ def test_sine_velocity_user_state_and_mode_projection_by_hand():
     # the default mode is 6: on 11 nodes (s = jL/12) sin(πj/2) again
     q, v = SineVelocity(0.02).initial_state(jr.FieldModel.from_rod(rod, 11, dF=5.0))
     np.testing.assert_allclose(v, np.array([1, 0, -1, 0] * 2 + [1, 0, -1]) * 0.02 / R, rtol=1e-14, atol=1e-13)
-    assert SineVelocity(1, 2).v0.dtype == jnp.float64 and SineVelocity(1, 2).mode.dtype == jnp.float64
+    assert SineVelocity(1, 2).amplitude.dtype == jnp.float64 and SineVelocity(1, 2).mode.dtype == jnp.float64
     # a state given in the model's coordinates is the initial state as it is; its fields are in metres
     q0, v0 = jnp.asarray([0.1, -0.2, 0.0, 0.3, 0.05]), jnp.asarray([1.0, 0.0, -2.0, 0.5, 0.25])
     us = UserState(q0, v0)
@@ -206,7 +206,7 @@ def test_the_forcing_phase_model_is_the_rod_plus_a_constant_acceleration():
     everything else of the rod unchanged: friction bounds μ·g/R (N = ρg), the kinetic energy
     ½ρR²Δ Σθ̇², the energies, the step limit; the module's `initial_state` is the
     perturbation's."""
-    from jaxrod.models.base import _Forced
+    from jaxrod.models.dof import _Forced
     from jaxrod.perturbations import initial_state
 
     F0 = float(jr.theory.reference_load(ROD))

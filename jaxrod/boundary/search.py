@@ -17,8 +17,8 @@ import jax
 import jax.numpy as jnp
 
 from .. import theory
-from ..models import SingleMode
-from ..scene import Scene, make_perturbation
+from ..registry import make_perturbation, model_class, perturbation_class
+from ..scene import Scene
 from .indicators import crossing_state, departure_rate, departure_sensitivities, single_mode_indicator
 from .roots import bisection, departure_secant, implicit_sensitivities, safeguarded_newton
 
@@ -61,18 +61,29 @@ def _scene(rod, dF, v0, kind, n, mode, dt, perturbation, key):
 METHODS = ("departure", "bisection")
 
 
-def _method_of(method, model):
-    """The search method: `"departure"` for the reduced models, label `"bisection"` by default
-    for the 3D rod. Its departure rate (on the node positions, `Rod3D.translation`, tangents in
-    float64: `for_tangents`; roots confirmed by a stable run, `departure_secant`) is opt-in:
-    u/(v₀ − v₀*) = 53–56 s⁻¹ at 12 segments, ΔF = 5 N; to rtol 1e-2 it takes 12 / 6 runs from
-    [1e-4, 1] m/s / from the field model's v₀* at 12 segments and 9 / 4 at 60 (bisection 12 /
-    10), inside bisection's bracket, but compiles longer (benchmarks/README.md, boundary_cost.py)."""
+def _method_of(method, model, perturbation="sine"):
+    """The search method: `"exact"` where the model's `search_method` is the closed form and the
+    perturbation projects exactly onto its mode (the single mode under a sine velocity),
+    else `method`, by default the model's `search_method` (`"departure"` for the reduced models,
+    label `"bisection"` for the 3D rod, and for the single mode under other perturbations).
+
+    The 3D rod's departure rate (on the node positions, `Rod3D.translation`, tangents in float64:
+    `for_tangents`; roots confirmed by a stable run, `departure_secant`) is opt-in: it compiles
+    longer than bisection saves (benchmarks/README.md, boundary_cost.py)."""
+    cls = model_class(model)
+    if cls.search_method == "exact" and perturbation_class(perturbation).projects_exactly:
+        return "exact"
     if method is None:
-        return "bisection" if model == "rod3d" else "departure"
+        return "departure" if cls.search_method == "departure" else "bisection"
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is invalid: expected one of {METHODS}.")
     return method
+
+
+def _confirms(model) -> bool:
+    """Whether a departure-rate search confirms its root with a stable run: for a model whose
+    default search is not the departure rate (the 3D rod's is not linear within 1 % of its root)."""
+    return model_class(model).search_method != "departure"
 
 
 def _named(res):
@@ -131,15 +142,15 @@ def critical_velocity(
     dtype = jnp.result_type(float)
     dF = jnp.asarray(dF, dtype)
     key = jax.random.key(0) if key is None else key
-    method = _method_of(method, model)
+    method = _method_of(method, model, perturbation)
     rod_of = lambda p: _rod_of(type(rod), p)
     params = _params_of(rod, dF=dF)
 
-    if model == "mode":
+    if method == "exact":
         def g2(v0, p):
             r = rod_of(p)
             F = theory.reference_load(r) + p["dF"]
-            m = SingleMode.from_rod(r, mode, F=F)
+            m = model_class(model).for_scene(r, F, None, mode)
             return single_mode_indicator(v0 / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
 
         res = _named(safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter))
@@ -151,7 +162,7 @@ def critical_velocity(
     scene_of2 = lambda v0, p: _scene(rod_of(p), p["dF"], v0, model, n, mode, dt, perturbation, key)
     lam = theory.max_growth_rate(rod, theory.reference_load(rod) + dF)
     res = _search(lambda v: scene_of2(v, params), bracket[0], bracket[1], lam, method, start, rtol,
-                  max_iter, t1, True, model == "rod3d")
+                  max_iter, t1, True, _confirms(model))
     sub = {k: params[k] for k in sensitivities}
     # the lowest buckled run lies within about rtol of the root: the tangents there give dv₀*/dp
     sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
@@ -192,7 +203,7 @@ def critical_load(
     dtype = jnp.result_type(float)
     amplitude = jnp.asarray(amplitude, dtype)
     key = jax.random.key(0) if key is None else key
-    method = _method_of(method, model)
+    method = _method_of(method, model, perturbation)
     rod_of = lambda p: _rod_of(type(rod), p)
     params = _params_of(rod, amplitude=amplitude)
     # Loads span decades and the runs depend on them through λ ∝ √ΔF: search log ΔF.
@@ -202,11 +213,11 @@ def critical_load(
     to_load = lambda res: eqx.tree_at(lambda r: (r.root, r.lo, r.hi), res,
                                       (jnp.exp(res.root), jnp.exp(res.lo), jnp.exp(res.hi)))
 
-    if model == "mode":
+    if method == "exact":
         def g2(dF, p):
             r = rod_of(p)
             F = theory.reference_load(r) + dF
-            m = SingleMode.from_rod(r, mode, F=F)
+            m = model_class(model).for_scene(r, F, None, mode)
             return single_mode_indicator(p["amplitude"] / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
 
         res = _named(to_load(safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, 0.0, max_iter,
@@ -220,7 +231,7 @@ def critical_load(
     F0 = theory.reference_load(rod)
     lam = lambda y: theory.max_growth_rate(rod, F0 + jnp.exp(y))
     res = to_load(_search(lambda y: scene_of2(jnp.exp(y), params), lo, hi, lam, method, y0, 0.0, max_iter,
-                          t1, False, model == "rod3d", atol=log_tol))
+                          t1, False, _confirms(model), atol=log_tol))
     sub = {k: params[k] for k in sensitivities}
     sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
     return res, sens
@@ -305,8 +316,8 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
     dFs = np.asarray(dFs, float)
     kw = dict(model=model, mode=mode, rtol=rtol, max_iter=max_iter, t1=t1, method=method,
               sensitivities=sensitivities)
-    if not (continuation and model != "mode" and _method_of(method, model) == "departure"):
-        if model != "mode":
+    if not (continuation and _method_of(method, model) == "departure"):
+        if _method_of(method, model) != "exact":
             probe = Scene(rod, float(np.max(dFs)), kind=model, n=n, mode=mode, dt=dt)
             n, dt = probe.size(), probe.step() if dt is None else dt
         fn = lambda dF: critical_velocity(rod, dF, bracket=bracket, n=n, dt=dt, **kw)
@@ -341,7 +352,7 @@ def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, 
     mus = np.asarray(mus, float)
     overrides = dict(rod_overrides or {})
     base = RodChannel.reference(mu=float(mus.max()), **overrides)
-    if model != "mode":
+    if _method_of(method, model, perturbation) != "exact":
         probe = Scene(base, float(bracket[1]), make_perturbation(perturbation, 1.0, mode), kind=model, n=n,
                       mode=mode, dt=dt)
         n = probe.size()

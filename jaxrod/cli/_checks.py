@@ -11,8 +11,6 @@ import numpy as np
 
 from ._common import _fail
 
-# The smallest resolution of each model (the models' own checks, said here with the option's name)
-MIN_N = {"field": (4, "nodes"), "galerkin": (1, "modes"), "rod3d": (4, "segments")}
 # The bottom of the critical-load bracket [N] (jaxrod/cli/boundary.py)
 MIN_DF_BRACKET = 1e-3
 
@@ -23,10 +21,14 @@ def check_args(args) -> None:
     check = getattr(args, "check", None)
     if check is not None:
         check(args)
-    if getattr(args, "n", None) is not None and getattr(args, "model", None) in MIN_N:
-        least, unit = MIN_N[args.model]
-        if args.n < least:
-            _fail(f"argument --n: {args.n!r} is invalid: the {args.model} model needs >= {least} {unit}.")
+    from ..registry import model_class, model_names
+
+    if getattr(args, "n", None) is not None and getattr(args, "model", None) in model_names():
+        cls = model_class(args.model)  # the smallest resolution: the model's own (`min_size`, `size_name`)
+        if cls.size_name is None:
+            _fail(f"argument --n: the {args.model} model has no size; leave --n out.")
+        if args.n < cls.min_size:
+            _fail(f"argument --n: {args.n!r} is invalid: the {args.model} model needs >= {cls.min_size} {cls.size_name}.")
     for option in ("out", "plot", "export"):
         if getattr(args, option, None) == "":
             _fail(f"argument --{option}: an empty path is invalid.")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ..registry import model_names, perturbation_names
+
 import json
 import math
 
@@ -109,7 +111,7 @@ def register_boundary(sub) -> None:
     bd = sub.add_parser("boundary", help="critical sine velocity v0*(dF) by root search")
     bd.add_argument("--mu", type=_finite_float, default=0.3)
     bd.add_argument("--dF", type=_range_spec, default="1:60:6", help="LO:HI:N loads above F0_6 [N], or a list A,B,C")
-    bd.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+    bd.add_argument("--model", choices=[*model_names(), "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     bd.add_argument("--n", type=_positive_int, default=None)
     bd.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
@@ -126,13 +128,13 @@ def register_critical_load(sub) -> None:
     """`jaxrod critical-load`: its arguments, checks and command."""
     cl = sub.add_parser("critical-load", help="critical load dF*(mu) by root search")
     cl.add_argument("--mu", type=_range_spec, default="0.05:1:6", help="LO:HI:N friction coefficients, or a list A,B,C")
-    cl.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
+    cl.add_argument("--perturbation", choices=list(perturbation_names()),
                     default="sine")
     cl.add_argument("--amplitude", type=_finite_float, default=0.015,
                     help="m/s for velocities, N/m for random-position, m for random-shape")
     cl.add_argument("--realizations", type=_positive_int, default=1)
     cl.add_argument("--seed", type=int, default=0)
-    cl.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+    cl.add_argument("--model", choices=[*model_names(), "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     cl.add_argument("--n", type=_positive_int, default=None)
     cl.add_argument("--max-dF", dest="max_dF", type=_finite_float, default=100.0, help="bracket top [N]")

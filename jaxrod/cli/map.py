@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ..registry import model_names
+
 import math
 
 from ._common import _fail, _finite_float, _positive_int, _range_spec
@@ -59,7 +61,7 @@ def register(sub) -> None:
                     help="friction coefficient (default: 0.3 and, in the same figure, 0)")
     mp.add_argument("--dF", type=_range_spec, default="0.5:64:20", help="LO:HI:N loads above F0_6 [N] (log-spaced), or a list A,B,C")
     mp.add_argument("--v0", type=_range_spec, default="0.001:0.2:24", help="LO:HI:N sine amplitudes [m/s] (log-spaced), or a list A,B,C")
-    mp.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+    mp.add_argument("--model", choices=[*model_names(), "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
     mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")

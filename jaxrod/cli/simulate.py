@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ..registry import model_names, perturbation_names
+
 import json
 import os
 
@@ -39,7 +41,7 @@ def _cmd_simulate(args) -> int:
         "mu": args.mu,
         "dF": args.dF,
         "F": float(scene.F),
-        "n": None if args.model == "mode" else (scene.nodes() if args.model == "field" else scene.model().n_modes),
+        "n": scene.size(),
         "dt": scene.step(),
         "t1": args.t1,
         "buckled": bool(sol.buckled),
@@ -152,7 +154,7 @@ def _simulate_rod3d(args, rod) -> int:
 def register(sub) -> None:
     """`jaxrod simulate`: its arguments, checks and command."""
     sm = sub.add_parser("simulate", help="simulate one perturbed rod")
-    sm.add_argument("--model", choices=["mode", "galerkin", "field", "rod3d", "auto"], default="field",
+    sm.add_argument("--model", choices=[*model_names(), "auto"], default="field",
                     help="rod3d: the full 3D rod (jaxrod.rod3d); auto: the cheapest adequate model, "
                          "from the measured table (jaxrod.model_choice)")
     sm.add_argument("--control", choices=["force", "load", "displacement"], default=None,
@@ -162,7 +164,7 @@ def register(sub) -> None:
                     help="rod3d displacement control only: pushing speed [m/s] (default 1e-3)")
     sm.add_argument("--dF", type=_finite_float, default=5.0, help="load above F0_m* [N] (default 5)")
     sm.add_argument("--mu", type=_finite_float, default=0.3, help="friction coefficient (default 0.3)")
-    sm.add_argument("--perturbation", choices=["sine", "random-velocity", "random-position", "random-shape"],
+    sm.add_argument("--perturbation", choices=list(perturbation_names()),
                     default="sine")
     sm.add_argument("--amplitude", type=_finite_float, default=0.02,
                     help="m/s (sine, random-velocity); N/m force for 1 ms (random-position); "

@@ -47,6 +47,8 @@ __all__ = ["e3", "e4", "e4_point", "e5", "e6c", "write_boundary", "SIZES", "WIDT
 WIDTH = 1.5
 E4_CASES = {"A": ("sine", 15e-3), "B": ("random-velocity", 15e-3), "C": ("random-position", 2.0)}
 FIELD_TOP = {"A": 100.0, "B": 100.0, "C": 300.0}  # the top of the field model's search bracket [N]
+# the field model's nodes (None: the scene's default): every mode of the random velocity's 500-segment grid
+FIELD_NODES = {"A": None, "B": 499, "C": None}
 PAPER_E3_EXPONENT = -0.77  # ../shared/PHYSICS.md §5 (results/paper/paper_numbers.json)
 SIZES = {
     False: dict(n=500, loads=(0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 40.0, 60.0), mus=(0.05, 0.1, 0.3, 0.5, 1.0),
@@ -135,15 +137,14 @@ def e3(out, quick=False, progress=True, n=None) -> dict:
                 runs=[p["runs"] for p in res["points"]], converged=sum(p["bracket"] is not None for p in res["points"]))
 
 
-def _critical_load(rod, amplitude, perturbation, key, model, n, t1, bracket, rtol):
+def _critical_load(rod, amplitude, perturbation, key, model, n, t1, bracket, rtol, method=None):
     import jax
 
     from ..boundary import critical_load
 
-    kw = dict(n=n, method="bisection") if model == "rod3d" else dict(n=499 if perturbation == "random-velocity" else None)
     t0 = time.perf_counter()
     r, _ = critical_load(rod, amplitude, model=model, perturbation=perturbation, key=key, t1=t1, bracket=bracket,
-                         rtol=rtol if model == "rod3d" else 1e-4, sensitivities=(), **kw)
+                         rtol=rtol, n=n, method=method, sensitivities=())
     r = jax.block_until_ready(r)
     return r, time.perf_counter() - t0
 
@@ -160,9 +161,9 @@ def e4_point(case, mu, realization, n, t1=0.5, width=WIDTH, rtol=1e-2) -> dict:
     rod = RodChannel.reference(mu=mu)
     kind, amplitude = E4_CASES[case]
     key = jax.random.fold_in(jax.random.key(0), realization)
-    f, sec_f = _critical_load(rod, amplitude, kind, key, "field", None, t1, (0.01, FIELD_TOP[case]), None)
+    f, sec_f = _critical_load(rod, amplitude, kind, key, "field", FIELD_NODES[case], t1, (0.01, FIELD_TOP[case]), 1e-4)
     f = float(f.root)
-    r, sec = _critical_load(rod, amplitude, kind, key, "rod3d", n, t1, (f / width, f * width), rtol)
+    r, sec = _critical_load(rod, amplitude, kind, key, "rod3d", n, t1, (f / width, f * width), rtol, "bisection")
     return dict(case=case, mu=float(mu), realization=realization, n=n, t1=float(t1), width=width, dF_star_field=f,
                 dF_star=float(r.root), lo=float(r.lo), hi=float(r.hi), runs=int(r.evaluations), result=int(r.result),
                 wall_s=round(sec + sec_f, 1))
@@ -257,6 +258,15 @@ def _theta_3d(sol):
     return theta, min(int(np.searchsorted(np.asarray(sol.ts), float(sol.t_stop))), len(theta) - 1)
 
 
+def _final_theta(sol):
+    """θ at the interior nodes where the run stopped: the 3D rod's recorded angle (its observable
+    `theta`), or a field model's final state."""
+    if "theta" in (sol.observables or {}):
+        theta, i = _theta_3d(sol)
+        return theta[i]
+    return np.asarray(sol.q_final)
+
+
 def _found(points, t1, *key):
     """The row of E4 point `key` (case, μ, realization, n) on a horizon ≥ `t1`, by `_best`."""
     return _best([r for r in points.find(*key) if float(r["t1"]) >= t1])
@@ -296,18 +306,14 @@ def e5(out, quick=False, progress=True, n=None, mus=None) -> dict:
                 # each model on the nodes and the step of its search (whose step is that of the bracket's
                 # top): near the boundary a 3D label can turn with a step 2e-4 apart
                 rod, f = RodChannel.reference(mu=mu), float(pt["dF_star_field"])
-                for model, star, size, top in (("rod3d", float(pt["dF_star"]), s["n"], f * float(pt["width"])),
-                                               ("field", f, 499 if case == "B" else None, FIELD_TOP[case])):
+                for model, pre, star, size, top in (
+                        ("rod3d", "", float(pt["dF_star"]), s["n"], f * float(pt["width"])),
+                        ("field", "field_", f, FIELD_NODES[case], FIELD_TOP[case])):
                     t0 = time.perf_counter()
                     dt = Scene(rod, top, make_perturbation(kind, 1.0, 6), model, size).step()  # as the search's
                     sol = Scene(rod, 1.05 * star, pert, model, size, 6, dt).run(t1=row["t1"], n_save=501)
-                    if model == "rod3d":
-                        theta, i = _theta_3d(sol)
-                        theta = theta[i]
-                    else:
-                        theta = np.asarray(sol.q_final)
+                    theta = _final_theta(sol)
                     m, share, m2, share2 = _modes(theta, None)
-                    pre = "" if model == "rod3d" else "field_"
                     row |= {pre + "dF_star": star, pre + "buckled": int(sol.buckled), pre + "t_stop": float(sol.t_stop),
                             pre + "mode": m, pre + "share": share, pre + "second_mode": m2,
                             pre + "second_share": share2, pre + "wall_s": round(time.perf_counter() - t0, 1)}
@@ -357,9 +363,10 @@ def e6c(out, quick=False, progress=True, n=None) -> dict:
     path = os.path.join(out, f"rod3d_random_position_n{s['n']}.csv")
     done = _Points(path, E6_COLUMNS, lambda r: (r["n"], r["case"]))
     if len(done.find(s["n"], "1.05 dF*")) == 0 or len(done.find(s["n"], "paper's 40 N")) == 0:
-        f, _ = _critical_load(rod, 2.0, "random-position", key, "field", None, t1, (1e-3, 300.0), None)
+        f, _ = _critical_load(rod, 2.0, "random-position", key, "field", None, t1, (1e-3, 300.0), 1e-4)
         f = float(f.root)
-        r, sec = _critical_load(rod, 2.0, "random-position", key, "rod3d", s["n"], t1, (f / 4, 4 * f), s["rtol"])
+        r, sec = _critical_load(rod, 2.0, "random-position", key, "rod3d", s["n"], t1, (f / 4, 4 * f), s["rtol"],
+                                "bisection")
         star = float(r.root)
         pert = make_perturbation("random-position", 2.0, 6, key)
         for case, dF in (("1.05 dF*", 1.05 * star), ("paper's 40 N", 40.0)):

@@ -30,7 +30,7 @@ def plot_simulation(scene, sol, path: str | None = None):
     verdict = f"buckled at t = {float(sol.t_buckle):.4g} s" if bool(sol.buckled) else "not buckled"
     ax0.set_title(f"{scene.kind} model, F = {float(scene.F):.4g} N: {verdict}")
     n_modes = min(40, theta.shape[1])
-    grid = theta if scene.kind == "field" else _resample(s, theta, float(scene.rod.L))
+    grid = theta if _interior_nodes(s, float(scene.rod.L)) else _resample(s, theta, float(scene.rod.L))
     idx = np.flatnonzero(keep)
     for i, lab in ((idx[min(1, len(idx) - 1)], "early"), (idx[len(idx) // 2], "middle"), (idx[-1], "final")):
         p = np.asarray(modal_spectrum(grid[i], n_modes))
@@ -47,6 +47,11 @@ def plot_simulation(scene, sol, path: str | None = None):
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig
+
+
+def _interior_nodes(s, L) -> bool:
+    """Whether `s` [m] are the equally spaced interior nodes jL/(n + 1) the DST-I needs."""
+    return bool(np.allclose(s, np.arange(1, len(s) + 1) * L / (len(s) + 1), rtol=0, atol=1e-12 * L))
 
 
 def _resample(s, theta, L, n=128):

@@ -3,24 +3,37 @@ r"""The small-angle field model θ(s, t) (P1) on the nodes of a pinned rod."""
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .. import theory
 from ..loads import AbstractLoad, as_load
-from ..modal import sine_basis
+from ..modal import dominant_mode, sine_basis
 from ..params import RodChannel
-from .base import AbstractModel
+from .dof import AbstractRodDOFModel
 from .single_mode import _stumpff
 
-__all__ = ["FieldModel"]
+__all__ = ["FieldModel", "DEFAULT_NODES", "default_nodes"]
+
+DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence) and `default_nodes`
+
+
+def default_nodes(rod: RodChannel, F) -> int:
+    """The field model's default node count for the load `F` [N] (concrete): 128 while at most
+    32 modes are unstable (m_max = (L/π)√(F/EI) ≤ 32), 384 beyond, from the convergence study
+    `benchmarks/field_convergence.py` (its table in benchmarks/README.md)."""
+    with jax.ensure_compile_time_eval():
+        m_max = float(rod.L / math.pi * jnp.sqrt(jnp.maximum(F, 0.0) / rod.EI))
+    return DEFAULT_NODES if m_max <= 32 else 384
 
 _OPERATORS = ("fd", "spectral")
 
 
-class FieldModel(AbstractModel):
+class FieldModel(AbstractRodDOFModel):
     r"""P1 on `n_nodes` interior nodes of a pinned rod, with friction at every node:
 
     `ρ θ_tt + EI θ_ssss + F(t) θ_ss + (ρg/R) θ + (μN/R) sgn(θ_t) = 0`,  θ = θ_ss = 0 at s = 0, L.
@@ -111,24 +124,11 @@ class FieldModel(AbstractModel):
         h = self.spacing
         return (4 / h**2) * jnp.sin(m * math.pi / (2 * (self.n_nodes + 1))) ** 2
 
-    def modal_stiffness(self, t=0.0) -> Float[Array, " n"]:
-        """k_m = (κ_m²/ρ)(EIκ_m² + ρg/(Rκ_m²) − F(t)) [1/s²] of the discrete operator."""
-        r = self.rod
-        k2 = self.wavenumbers_sq()
-        return k2 / r.rho * (r.EI * k2 + r.w / (r.R * k2) - self.load(t))
-
     def frictionless_loads(self) -> Float[Array, " n"]:
         """F⁰_m [N] of the discrete operator (P5 with κ_m)."""
         r = self.rod
         k2 = self.wavenumbers_sq()
         return r.EI * k2 + r.w / (r.R * k2)
-
-    def max_frequency(self):
-        r = self.rod
-        k2 = self.wavenumbers_sq()
-        F_min, _ = self.load.extremes()
-        lam = k2 / r.rho * (r.EI * k2 + r.w / (r.R * k2) - F_min)
-        return jnp.sqrt(jnp.maximum(jnp.max(lam), 0.0))
 
     # -- forces ------------------------------------------------------------------------------
 
@@ -150,11 +150,6 @@ class FieldModel(AbstractModel):
 
     def acceleration(self, q, t):
         return -self._stiffness_times(q, t) / self.rod.rho
-
-    def friction_bounds(self, t):
-        r = self.rod
-        scale = r.N / (r.rho * r.R)
-        return r.mu_s * scale, r.mu_d * scale
 
     # -- energies (J) ------------------------------------------------------------------------
 
@@ -184,16 +179,6 @@ class FieldModel(AbstractModel):
             "load": load,
         }
 
-    # -- stopping --------------------------------------------------------------------------
-
-    @property
-    def autonomous(self) -> bool:
-        return self.load.constant
-
-    @property
-    def buckle_threshold(self) -> float:
-        return self.threshold
-
     def linear_flow(self, q, v, t, h):
         S = sine_basis(self.n_nodes)
         c = 2.0 / (self.n_nodes + 1)
@@ -203,7 +188,24 @@ class FieldModel(AbstractModel):
         a, b = a * c0 + b * h * c1, b * c0 - k * a * h * c1
         return S @ a, S @ b
 
-    def check(self):
-        r = self.rod
-        ok = (r.mu_s >= 0) & (r.mu_d >= 0) & (r.mu_d <= r.mu_s) & (r.R > 0) & (r.EI > 0)
-        return ok & jnp.isfinite(self.load(0.0))
+    # -- the scene -----------------------------------------------------------------------------
+
+    size_name: ClassVar[str] = "nodes"
+    min_size: ClassVar[int] = 4
+    size = property(lambda self: self.n_nodes)
+
+    @classmethod
+    def for_scene(cls, rod, F, size, mode):
+        return cls.from_rod(rod, size, F=F)
+
+    @classmethod
+    def default_size(cls, rod, F, perturbation) -> int:
+        """`default_nodes` of the load, and at least the nodes the perturbation needs resolved
+        (`AbstractPerturbation.least_nodes`)."""
+        return max(default_nodes(rod, F), perturbation.least_nodes)
+
+    def field_of(self, q):
+        return self.sample_points(), q
+
+    def dominant_mode(self, q):
+        return dominant_mode(q)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -13,10 +14,12 @@ from jaxtyping import Array, ArrayLike, Float
 from .. import theory
 from ..loads import AbstractLoad, as_load
 from ..params import RodChannel
-from .base import AbstractModel
+from .dof import AbstractRodDOFModel
 from .single_mode import _stumpff
 
-__all__ = ["GalerkinModel"]
+__all__ = ["GalerkinModel", "DEFAULT_MODES"]
+
+DEFAULT_MODES = 32  # a scene's Galerkin model
 
 
 @functools.lru_cache(maxsize=32)
@@ -26,7 +29,7 @@ def _quadrature_np(n_modes: int, n_quad: int) -> np.ndarray:
     return np.sin(np.pi * j * m / n_quad)
 
 
-class GalerkinModel(AbstractModel):
+class GalerkinModel(AbstractRodDOFModel):
     r"""P2 with modes m = 1..`n_modes`: `Ä_m + k_m A_m + (μN/(ρR)) B_m = 0`, where
     k_m is P3 (exact wavenumbers ω_m = mπ/L) and
     B_m = (2/L)∫₀ᴸ sgn(Σ_k Ȧ_k sin ω_k s) sin ω_m s ds.
@@ -107,22 +110,15 @@ class GalerkinModel(AbstractModel):
         return self._phi() @ q
 
     def wavenumbers(self):
+        """ω_m = mπ/L [1/m], m = 1..n_modes (exact)."""
         m = jnp.arange(1, self.n_modes + 1, dtype=self.rod.L.dtype)
         return m * math.pi / self.rod.L
 
-    def modal_stiffness(self, t=0.0):
-        r = self.rod
-        om2 = self.wavenumbers() ** 2
-        return om2 / r.rho * (r.EI * om2 + r.w / (r.R * om2) - self.load(t))
+    def wavenumbers_sq(self):
+        return self.wavenumbers() ** 2
 
     def acceleration(self, q, t):
         return -self.modal_stiffness(t) * q
-
-    def friction_bounds(self, t):
-        """Per quadrature point [rad/s²]."""
-        r = self.rod
-        scale = r.N / (r.rho * r.R)
-        return r.mu_s * scale, r.mu_d * scale
 
     def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
         f_s, f_d = self.friction_bounds(t)
@@ -156,26 +152,29 @@ class GalerkinModel(AbstractModel):
             "load": -0.5 * self.load(t) * c * jnp.sum(om2 * q * q),
         }
 
-    def max_frequency(self):
-        r = self.rod
-        om2 = self.wavenumbers() ** 2
-        F_min, _ = self.load.extremes()
-        lam = om2 / r.rho * (r.EI * om2 + r.w / (r.R * om2) - F_min)
-        return jnp.sqrt(jnp.maximum(jnp.max(lam), 0.0))
-
-    @property
-    def autonomous(self) -> bool:
-        return self.load.constant
-
-    @property
-    def buckle_threshold(self) -> float:
-        return self.threshold
-
     def linear_flow(self, q, v, t, h):
         k = self.modal_stiffness(t)
         c0, c1, _ = _stumpff(k * h**2)
         return q * c0 + v * h * c1, v * c0 - k * q * h * c1
 
-    def check(self):
-        r = self.rod
-        return (r.mu_s >= 0) & (r.mu_d >= 0) & (r.mu_d <= r.mu_s) & jnp.isfinite(self.load(0.0))
+    # -- the scene -----------------------------------------------------------------------------
+
+    size_name: ClassVar[str] = "modes"
+    min_size: ClassVar[int] = 1
+    size = property(lambda self: self.n_modes)
+
+    @classmethod
+    def for_scene(cls, rod, F, size, mode):
+        return cls.from_rod(rod, size, F=F)
+
+    @classmethod
+    def default_size(cls, rod, F, perturbation) -> int:
+        return DEFAULT_MODES
+
+    def field_of(self, q):
+        """θ at the quadrature points (any leading axes of `q`)."""
+        return self.sample_points(), q @ self._phi().T
+
+    def dominant_mode(self, q):
+        """The mode of the largest amplitude."""
+        return jnp.argmax(jnp.abs(q), axis=-1) + 1

@@ -3,16 +3,18 @@ r"""The single-mode Coulomb oscillator (P4) and its exact piecewise solution."""
 from __future__ import annotations
 
 import math
+from typing import ClassVar
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from .. import theory
 from .._results import RESULTS
 from ..params import RodChannel
-from .base import AbstractModel
+from .dof import AbstractDOFModel
 
 __all__ = ["SingleMode", "exact_solution"]
 
@@ -24,7 +26,7 @@ def _arr(x):
     return x if jnp.issubdtype(x.dtype, jnp.floating) else x.astype(jnp.result_type(float))
 
 
-class SingleMode(AbstractModel):
+class SingleMode(AbstractDOFModel):
     r"""One sine mode of the rod in the channel: `Ä + k A + f sgn(Ȧ) = 0` (P4).
 
     A is the modal amplitude of the deflection angle θ = A sin(ω_m s) [rad]; the lateral
@@ -36,6 +38,10 @@ class SingleMode(AbstractModel):
     - `k`: modal stiffness [1/s²] (P3); negative past the frictionless load.
     - `f_s`: static friction amplitude 4μ_s N/(πρR) [rad/s²], ≥ `f_d`.
     - `f_d`: dynamic friction amplitude 4μ_d N/(πρR) [rad/s²], ≥ 0.
+    - `mode`: the mode number m (static; `None`: not known, as for an oscillator built from
+      k, f_s, f_d alone).
+    - `rod`: the rod it is a mode of (`None` likewise): a scene reads its field and projects
+      perturbations with it.
 
     Build it from a rod with [`jaxrod.SingleMode.from_rod`][].
     """
@@ -43,6 +49,8 @@ class SingleMode(AbstractModel):
     k: Float[Array, ""] = eqx.field(converter=_arr)
     f_s: Float[Array, ""] = eqx.field(converter=_arr)
     f_d: Float[Array, ""] = eqx.field(converter=_arr)
+    mode: int | None = eqx.field(static=True, default=None)
+    rod: RodChannel | None = None
 
     def __check_init__(self):
         import numpy as np
@@ -82,6 +90,8 @@ class SingleMode(AbstractModel):
             k=theory.stiffness(rod, m, F),
             f_s=theory.friction_amplitude(rod, rod.mu_s),
             f_d=theory.friction_amplitude(rod, rod.mu_d),
+            mode=int(m) if isinstance(m, (int, np.integer)) else None,
+            rod=rod,
         )
 
     def acceleration(self, q, t):
@@ -97,7 +107,7 @@ class SingleMode(AbstractModel):
         """Per unit modal mass [rad²/s²]: kinetic ½Ȧ² and potential ½kA²."""
         return {"kinetic": self.kinetic_energy(v), "potential": 0.5 * jnp.sum(self.k * q * q)}
 
-    def max_frequency(self):
+    def max_frequency(self, q=None):
         return jnp.sqrt(jnp.maximum(self.k, 0.0))
 
     def linear_flow(self, q, v, t, h):
@@ -111,6 +121,40 @@ class SingleMode(AbstractModel):
             & (self.f_d >= 0)
             & (self.f_d <= self.f_s)
         )
+
+
+    # -- the scene -----------------------------------------------------------------------------
+
+    size_name: ClassVar[None] = None
+    min_size: ClassVar[int] = 1
+    search_method: ClassVar[str] = "exact"  # Newton on the exact solution (`exact_solution`)
+    size = property(lambda self: None)
+    default_dt: ClassVar[float] = 1e-4  # a scene's step [s]
+
+    @classmethod
+    def for_scene(cls, rod, F, size, mode):
+        return cls.from_rod(rod, mode, F=F)
+
+    @classmethod
+    def default_size(cls, rod, F, perturbation) -> None:
+        return None
+
+    def scene_step(self, rod, F, scheme_step) -> float:
+        return self.default_dt
+
+    def initial_state_under(self, perturbation, integrator, grid):
+        """The perturbation projected onto the mode (`AbstractPerturbation.modal_state`; a field
+        perturbation is drawn on `grid()`'s field model first)."""
+        return perturbation.modal_state(self.mode, self.rod.R, grid)
+
+    def field_of(self, q):
+        """θ = A sin(mπs/L) on 129 points (any leading axes of `q`)."""
+        s = jnp.linspace(0.0, self.rod.L, 129)
+        shape = jnp.sin(self.mode * jnp.pi * s / self.rod.L)
+        return s, jnp.asarray(q)[..., None] * shape
+
+    def dominant_mode(self, q):
+        return jnp.full(jnp.shape(q), self.mode)
 
 
 # -- Closed-form pieces ------------------------------------------------------------------

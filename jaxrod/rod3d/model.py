@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
+from ..modal import dominant_mode
 from ..models.base import AbstractModel
 from ..params import RodChannel
 from ._checks import check_arguments
@@ -201,27 +202,10 @@ class Rod3D(AbstractModel):
             v = v.at[-1, 0].set(-self.speed)
         return v
 
-    # -- energies --------------------------------------------------------------------------
-    def strains(self, x, Q):
-        return energy.strains(self, x, Q)
-
-    def elastic_terms(self, x, Q) -> dict[str, Float[Array, ""]]:
-        return energy.elastic_terms(self, x, Q)
-
-    def penetration(self, x) -> tuple[Float[Array, " n1"], Float[Array, "n1 3"]]:
-        return energy.penetration(self, x)
-
-    def contact_energy(self, x):
-        return energy.contact_energy(self, x)
-
-    def external_energy(self, x):
-        return energy.external_energy(self, x)
-
-    def potential(self, x, Q):
-        return energy.potential(self, x, Q)
-
-    def kinetic_terms(self, v, w):
-        return energy.kinetic_terms(self, v, w)
+    # -- energies (`jaxrod.rod3d.energy`) ------------------------------------------------------
+    strains, elastic_terms, penetration = energy.strains, energy.elastic_terms, energy.penetration  # (x, Q), (x, Q), (x)
+    contact_energy, external_energy = energy.contact_energy, energy.external_energy  # (x)
+    potential, kinetic_terms = energy.potential, energy.kinetic_terms  # (x, Q), (v, w)
 
     def energy_terms(self, q: Rod3DPosition, v: Rod3DVelocity, t=None) -> dict[str, Float[Array, ""]]:
         """Every energy by kind [J]: kinetic, rotational, stretch, shear, bend, twist,
@@ -389,6 +373,54 @@ class Rod3D(AbstractModel):
         held ends), displaced along the wall by `offset` [m] and moving along it at `velocity`
         [m/s] at its nodes (see `initial_state`)."""
         return self.initial_state(None, lateral_velocity=velocity, lateral_offset=offset)
+
+    # -- the rest of the interface ---------------------------------------------------------------
+    def friction_acceleration(self, friction, v, t):
+        raise NotImplementedError("Rod3D runs with the fixed-step schemes only (its friction is an impulse pass).")
+
+    def linear_flow(self, q, v, t, h):
+        raise NotImplementedError("Rod3D has no exact linear flow.")
+
+    def check(self) -> Bool[Array, ""]:
+        return jnp.array(True)  # its arguments are checked when it is made (`_checks.check_arguments`)
+
+    # -- the scene (a dead load F at the free end; `jaxrod.Scene`) -------------------------------
+    size_name: ClassVar[str] = "segments"
+    min_size: ClassVar[int] = 4
+    search_method: ClassVar[str] = "bisection"  # the departure rate is opt-in (`boundary.search`)
+    sweep_lanes: ClassVar[int] = 1  # a lane per core: its steps are large enough to fill one
+    size = property(lambda self: self.n_segments)
+    default_segments: ClassVar[int] = 60  # a scene's, as E1 and E6 (docs/rod3d.md)
+
+    @classmethod
+    def for_scene(cls, rod, F, size, mode) -> Rod3D:
+        return cls(rod, size, control="load", end_load=F)
+
+    @classmethod
+    def default_size(cls, rod, F, perturbation) -> int:
+        return cls.default_segments
+
+    @classmethod
+    def scheme_under(cls, perturbation) -> str | None:
+        """Its implicit default only under a perturbation measured adequate for it (`implicit_3d`)."""
+        return None if type(perturbation).implicit_3d else "leapfrog"
+
+    @classmethod
+    def bytes_per_member(cls, size: int | None) -> int:
+        """Positions, velocities, rotations, forces, caches: 20 numbers per node per state row."""
+        return 8 * (24 * 20 * (size + 1) + 64) + 4096
+
+    def scene_step(self, rod, F, scheme_step) -> float:
+        return scheme_step(self)
+
+    def initial_state_under(self, perturbation, integrator, grid):
+        return perturbation.initial_state(self, integrator)
+
+    def field_of(self, q):
+        return jnp.linspace(0.0, self.rod.L, self.n + 1), self.theta(q.x)
+
+    def dominant_mode(self, q):
+        return dominant_mode(wall_angle(q.x)[..., 1:-1])
 
     def theta(self, x) -> Float[Array, " n1"]:
         """Angle of each node from the channel bottom [rad] (as θ in the field model)."""

@@ -16,7 +16,8 @@ from .._results import RESULTS
 from ..integrators import default_for
 from ..integrators.base import RunOptions, save_grid
 from ..params import RodChannel
-from ..scene import dominant_mode_of, DEFAULT_SEGMENTS, Scene, default_nodes, make_perturbation, scheme_for
+from ..registry import make_perturbation, model_class
+from ..scene import Scene
 from .spec import ROD_FIELDS, SweepSpec, _STIFFNESS_FIELDS
 
 __all__ = ['N_SAVE']
@@ -74,10 +75,10 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
 
     opts = RunOptions(buckle_threshold=spec.threshold, save_state=False)
     m, h = save_grid(spec.t1, N_SAVE, dt)
-    # when the sweep chose dt itself for the 3D rod it is half the smallest limit over the sweep's
-    # rods at its largest load (`_rod3d_resolution`), so the members' own check (a closed form,
-    # a few operations) is skipped. A given `spec.dt` is still checked member by member.
-    check_limit = not (spec.model == "rod3d" and spec.dt is None)
+    # a step the sweep chose itself is the smallest default step over its rods at its largest load
+    # (`_resolution`), within every member's limit, so the members' own check is skipped; a given
+    # `spec.dt` is checked member by member.
+    check_limit = spec.dt is not None
 
     def setup(p, index, base_key):
         ok, safe, dF, amp, key = _member_inputs(spec, p, index, base_key)
@@ -95,7 +96,7 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
         return run.finished(N_SAVE)
 
     def outputs(ok, model, run):
-        dom = dominant_mode_of(spec.model, run.q, spec.mode)
+        dom = model.dominant_mode(run.q)
         code = integrator(model).result(model, run, jnp.asarray(h, run.t.dtype), check_limit)
         result = jnp.where(ok & model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
         return {
@@ -158,37 +159,35 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
         rods = [RodChannel.reference(mu=spec.mu, **spec.rod)]
     if not rods:
         raise ValueError("no member of the sweep has valid rod parameters.")
+    cls = model_class(spec.model)
+    pert = _perturbation(spec)
     n = spec.n
-    if spec.model == "field" and n is None:
-        n = max(default_nodes(r, theory.reference_load(r) + dF_max) for r in rods)
-    if spec.model == "galerkin" and n is None:
-        n = 32
-    if spec.model == "rod3d":
-        return _rod3d_resolution(spec, rods, dF_max)
-    dt = spec.dt
-    if dt is None:
-        dt = min(Scene(r, jnp_.asarray(dF_max), kind=spec.model, n=n, mode=spec.mode).step() for r in rods)
+    if n is None:  # the largest default size over the rods at the largest load
+        sizes = [cls.default_size(r, theory.reference_load(r) + dF_max, pert) for r in rods]
+        n = None if None in sizes else max(sizes)
+    scenes = [Scene(r, jnp_.asarray(dF_max), pert, kind=spec.model, n=n, mode=spec.mode) for r in rods]
+    if spec.dt is not None:
+        _check_given_step(spec, scenes)
+    dt = spec.dt or min(s.step() for s in scenes)
     grid_dt = min(Scene(r, jnp_.asarray(dF_max), kind="field", n=128).step() for r in rods)
     return n, float(dt), float(grid_dt)
 
 
-def _rod3d_resolution(spec: SweepSpec, rods, dF_max: float):
-    """n (default 60 segments, E1/E6's) and dt: the smallest default step of the rod's scheme
-    (`jaxrod.integrators.default_step`) over the rods at the largest load (a given `spec.dt` must lie below
-    that scheme's stability limit, which the implicit default does not have)."""
-    from ..integrators import default_for, default_step
-    from ..rod3d import Rod3D
-
-    n = spec.n or DEFAULT_SEGMENTS
-    models = [Rod3D(r, n, control="load", end_load=float(theory.reference_load(r)) + dF_max) for r in rods]
-    limit = min(float(default_for(m, 1.0, _scheme(spec)).step_limit(m)) for m in models)
-    if spec.dt is not None and not (0 < spec.dt < limit):
-        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model 'rod3d': the scheme's step limit "
+def _check_given_step(spec: SweepSpec, scenes) -> None:
+    """A given `spec.dt` must lie below the step limit of the members' scheme where the model's
+    default step is not an explicit limit's fraction (the 3D rod's implicit default)."""
+    models = [s.model() for s in scenes]
+    limit = min(float(default_for(m, 1.0, s.scheme()).step_limit(m)) for m, s in zip(models, scenes))
+    if not (0 < spec.dt < limit):
+        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model {spec.model!r}: the scheme's step limit "
                          f"is {limit:.4g} s; use 0 < dt < {limit:.4g} s.")
-    return n, float(spec.dt or min(default_step(m, scheme=_scheme(spec)) for m in models)), 0.0
+
+
+def _perturbation(spec: SweepSpec):
+    return make_perturbation(spec.perturbation, 1.0, spec.mode, None, spec.duration)
 
 
 def _scheme(spec: SweepSpec) -> str | None:
-    """The scheme of the sweep's members (`jaxrod.scene.scheme_for` of its model and perturbation)."""
-    return scheme_for(spec.model, make_perturbation(spec.perturbation, 1.0, spec.mode, None, spec.duration))
+    """The scheme of the sweep's members (the model's `scheme_under` its perturbation)."""
+    return model_class(spec.model).scheme_under(_perturbation(spec))
 

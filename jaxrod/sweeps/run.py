@@ -16,6 +16,7 @@ import numpy as np
 
 from ..batching import DEFAULT_LANES, DEFAULT_REFILL_EVERY, run_pool
 from ..distributed import broadcast, gather, share
+from ..registry import model_class
 from .member import _engine_member, _make_member, _static_resolution
 from .result import SweepResult, _FILL
 from .spec import OUTPUTS, PARAMETERS, SweepSpec
@@ -27,7 +28,6 @@ __all__ = ['sweep']
 # vector units, and a batch of them only adds memory traffic and friction sweeps run for the
 # slowest lane — 64 rods on 2 devices cost 17 / 74 µs per rod-step at 60 / 500 segments in 1
 # lane per device against 19 / 116 in 16 (benchmarks/README.md, "3D rod: batched rods").
-LANES_OF_MODEL = {"rod3d": 1}
 
 
 def _expand(inputs: Mapping[str, object], combine: str):
@@ -58,11 +58,7 @@ def _expand(inputs: Mapping[str, object], combine: str):
 
 
 def _bytes_per_member(spec: SweepSpec, n: int | None) -> int:
-    dof = n or 1
-    if spec.model == "rod3d":
-        dof = 20 * (n + 1)  # positions, velocities, rotations, forces, caches per node
-    # state, velocity, acceleration, trial velocities, stencil temporaries, per-save records
-    return 8 * (24 * dof + 64) + 4096
+    return model_class(spec.model).bytes_per_member(n)
 
 
 def sweep(
@@ -106,7 +102,7 @@ def sweep(
     - `scheduling`: `"pool"` (default): continuous batching — each device runs `lanes` members
       side by side and a lane whose member has stopped takes the next pending one every
       `refill_every` steps, inside one compiled loop ([`jaxrod.batching.run_pool`][]);
-      `lanes` defaults to 16 for the reduced models and 1 for `"rod3d"` (`LANES_OF_MODEL`);
+      `lanes` defaults to 16 for the reduced models and 1 for `"rod3d"` (the model's `sweep_lanes`);
       `"chunk"`: the whole chunk vmapped at once, running until its slowest member stops
       (kept for comparison). Results are identical either way.
 
@@ -153,7 +149,7 @@ def sweep(
     if scheduling not in ("pool", "chunk"):
         raise ValueError(f"scheduling = {scheduling!r} is invalid: expected 'pool' or 'chunk'.")
     if lanes is None:
-        lanes = LANES_OF_MODEL.get(spec.model, DEFAULT_LANES)
+        lanes = model_class(spec.model).sweep_lanes or DEFAULT_LANES
     for name, val in (("lanes", lanes), ("refill_every", refill_every)):
         if not (isinstance(val, int) and val >= 1):
             raise ValueError(f"{name} = {val!r} is invalid: expected an int >= 1.")

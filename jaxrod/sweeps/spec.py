@@ -6,7 +6,7 @@ import dataclasses
 from collections.abc import Mapping
 
 
-from ..scene import MODELS, PERTURBATIONS
+from ..registry import model_class, perturbation_class
 
 __all__ = ['ROD_FIELDS', 'PARAMETERS', 'OUTPUTS', 'SweepSpec']
 
@@ -32,7 +32,7 @@ class SweepSpec:
       under the dead load F⁰_m* + ΔF with friction at the contact point; `n` segments, default
       60; dt 0.5 of its explicit limit; `threshold` on max|θ| as for the other models).
     - `perturbation`: "sine", "random-velocity", "random-position" or "random-shape"
-      (amplitude units as in [`jaxrod.scene.make_perturbation`][]; "random-position", a
+      (amplitude units as in [`jaxrod.registry.make_perturbation`][]; "random-position", a
       timed force pulse of 1 ms, for "rod3d" too).
     - `mu`: friction coefficient (μ_s = μ_d) unless swept; `dF` [N], `amplitude` defaults.
     - `mode`: sine / single mode number; `n`: nodes, modes or 3D segments (`None`: the
@@ -56,15 +56,11 @@ class SweepSpec:
     rod: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
-        if self.model not in MODELS:
-            raise ValueError(f"SweepSpec.model = {self.model!r} is invalid: expected one of {MODELS}.")
-        if self.model == "rod3d" and self.n is not None and not (isinstance(self.n, int) and self.n >= 4):
-            raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model 'rod3d': expected an int >= 4 segments.")
-        if self.perturbation not in PERTURBATIONS:
-            raise ValueError(
-                f"SweepSpec.perturbation = {self.perturbation!r} is invalid: expected one of "
-                f"{PERTURBATIONS}."
-            )
+        cls = model_class(self.model, "SweepSpec.model")
+        if self.n is not None and not (isinstance(self.n, int) and self.n >= cls.min_size):
+            raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model {self.model!r}: expected an int >= "
+                             f"{cls.min_size} {cls.size_name or ''}".rstrip() + ".")
+        perturbation_class(self.perturbation, "SweepSpec.perturbation")
         if not (isinstance(self.t1, (int, float)) and self.t1 > 0):
             raise ValueError(f"SweepSpec.t1 = {self.t1!r} is invalid: expected > 0 s.")
         bad = set(self.rod) - set(ROD_FIELDS)

@@ -1,0 +1,271 @@
+"""The shared machinery of the models whose friction acts per degree of freedom (or per sample
+point of a field): [`AbstractDOFModel`][jaxrod.models.dof.AbstractDOFModel], the rod models with
+a rod and an axial load ([`AbstractRodDOFModel`][jaxrod.models.dof.AbstractRodDOFModel]: the
+field and Galerkin models), and the lateral force of a random position perturbation's forcing
+phase as a wrapper that forwards the whole interface."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import abc
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float
+
+from .. import theory
+from ..loads import AbstractLoad
+from ..params import RodChannel
+from .base import AbstractModel, friction_work
+
+__all__ = ["AbstractDOFModel", "AbstractRodDOFModel", "DT_FRACTION", "GROWTH_FRACTION"]
+
+DT_FRACTION = 0.4  # a scene's step: this fraction of the explicit step limit 2/ω_max at ΔF = 0
+GROWTH_FRACTION = 0.25  # ... and at most this fraction of 1/λ_max, the loaded rod's fastest growth
+
+
+def _static(fn, message: str) -> float:
+    """`fn()` as a Python float from concrete values, or a `ValueError(message)` when traced."""
+    try:
+        with jax.ensure_compile_time_eval():
+            return float(fn())
+    except jax.errors.ConcretizationTypeError:
+        raise ValueError(message) from None
+
+
+class AbstractDOFModel(AbstractModel):
+    """A model with friction per degree of freedom (or per sample point): the per-DOF step
+    pieces, stick test and defaults of the reduced models."""
+
+    held_is_fixed: ClassVar[bool] = True
+    scheme: ClassVar[str] = "verlet"
+    sweep_lanes: ClassVar[int | None] = None
+
+    # -- the step ---------------------------------------------------------------------------------
+
+    def accelerations(self, q, v, t):
+        """The conservative acceleration (no velocity-dependent forces)."""
+        return self.acceleration(q, t)
+
+    def kick(self, q, v, a, h):
+        return v + h * a
+
+    def drift(self, q, v, h):
+        return q + h * v
+
+    def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
+        """The per-DOF law's update with the bounds of `friction_bounds`."""
+        f_s, f_d = self.friction_bounds(t)
+        return friction.update(v_trial, v_prev, h, f_s, f_d)
+
+    def friction_acceleration(self, friction, v, t):
+        f_s, f_d = self.friction_bounds(t)
+        return friction.acceleration(v, f_s, f_d)
+
+    def impulse_work(self, v_prev, v_trial, v_after, a, h):
+        """Friction's loss per DOF (`friction_work`); no driven boundary does work."""
+        return friction_work(self, v_prev, v_trial, v_after), jnp.zeros((), jnp.result_type(float))
+
+    def observables(self, q, v, a, t) -> dict:
+        return {}
+
+    # -- stopping ---------------------------------------------------------------------------------
+
+    @property
+    def autonomous(self) -> bool:
+        return True
+
+    @property
+    def buckle_threshold(self) -> float:
+        return math.inf
+
+    def amplitude(self, q) -> Float[Array, ""]:
+        return jnp.max(jnp.abs(q))
+
+    def is_stuck(self, q, v, a, t) -> Bool[Array, ""]:
+        return self.stop_measures(q, v, a, t)[1]
+
+    def stop_measures(self, q, v, a, t):
+        """Both from one reduction, the largest of |q| and of |v| + max(|a| − f_s, 0), which is
+        zero exactly when every DOF is at rest with |a| ≤ f_s (a float difference is zero only
+        for equal floats, and has the right sign); one fused reduction of two rows is cheaper
+        than two separate maxima."""
+        f_s, _ = self.friction_bounds(t)
+        held = jnp.abs(v) + jnp.maximum(jnp.abs(a) - f_s, 0.0)
+        both = jnp.max(jnp.stack([jnp.abs(q), held]).reshape(2, -1), axis=-1)
+        return both[0], both[1] == 0
+
+    def check(self) -> Bool[Array, ""]:
+        return jnp.array(True)
+
+    # -- perturbations and derivatives ------------------------------------------------------------
+
+    def sample_points(self) -> Float[Array, " n"]:
+        raise TypeError(
+            f"{type(self).__name__} takes no field perturbation: it has no sample points (for "
+            "SingleMode use jaxrod.perturbations.project_to_mode)."
+        )
+
+    def from_samples(self, values):
+        """Identity: the nodal models' coordinates are the samples."""
+        return values
+
+    @property
+    def resolved_modes(self) -> int:
+        """One sine mode per sample point."""
+        return self.sample_points().shape[-1]
+
+    def perturbed_state(self, offset, velocity):
+        """θ = offset/R and θ̇ = velocity/R in the model's coordinates (`from_samples`)."""
+        R = self.rod.R
+        return self.from_samples(offset / R), self.from_samples(velocity / R)
+
+    def under_lateral_force(self, force) -> AbstractModel:
+        """The acceleration force/(ρR) added, in the model's coordinates (`from_samples`)."""
+        return _Forced(self, self.from_samples(force / (self.rod.rho * self.rod.R)))
+
+    def translation(self, q, v):
+        return q, v
+
+    def for_tangents(self) -> AbstractModel:
+        return self
+
+    # -- the scene ---------------------------------------------------------------------------------
+
+    @classmethod
+    def scheme_under(cls, perturbation) -> str | None:
+        return None
+
+    @classmethod
+    def bytes_per_member(cls, size: int | None) -> int:
+        """State, velocity, acceleration, trial velocities, stencil temporaries, per-save records."""
+        return 8 * (24 * (size or 1) + 64) + 4096
+
+    def initial_state_under(self, perturbation, integrator, grid):
+        return perturbation.initial_state(self, integrator)
+
+
+class AbstractRodDOFModel(AbstractDOFModel):
+    """A reduced rod model of P1 with a rod and an axial load: friction μN/(ρR) at each sample
+    point, the load's constancy, its buckling threshold and step from the wavenumbers² its
+    operator sees (`wavenumbers_sq`)."""
+
+    rod: eqx.AbstractVar[RodChannel]
+    load: eqx.AbstractVar[AbstractLoad]
+    search_method: ClassVar[str] = "departure"
+
+    @abc.abstractmethod
+    def wavenumbers_sq(self) -> Float[Array, " n"]:
+        """κ_m² [1/m²] of the modes m = 1.. as the operator sees them."""
+
+    def modal_stiffness(self, t=0.0) -> Float[Array, " n"]:
+        """k_m = (κ_m²/ρ)(EIκ_m² + ρg/(Rκ_m²) − F(t)) [1/s²] (P3 with the operator's κ_m)."""
+        r = self.rod
+        k2 = self.wavenumbers_sq()
+        return k2 / r.rho * (r.EI * k2 + r.w / (r.R * k2) - self.load(t))
+
+    def max_frequency(self, q=None):
+        r = self.rod
+        k2 = self.wavenumbers_sq()
+        F_min, _ = self.load.extremes()
+        lam = k2 / r.rho * (r.EI * k2 + r.w / (r.R * k2) - F_min)
+        return jnp.sqrt(jnp.maximum(jnp.max(lam), 0.0))
+
+    def friction_bounds(self, t):
+        """μ_s N/(ρR), μ_d N/(ρR) [rad/s²] at every sample point."""
+        r = self.rod
+        scale = r.N / (r.rho * r.R)
+        return r.mu_s * scale, r.mu_d * scale
+
+    @property
+    def autonomous(self) -> bool:
+        return self.load.constant
+
+    @property
+    def buckle_threshold(self) -> float:
+        return self.threshold
+
+    def check(self):
+        r = self.rod
+        ok = (r.mu_s >= 0) & (r.mu_d >= 0) & (r.mu_d <= r.mu_s) & (r.R > 0) & (r.EI > 0)
+        return ok & jnp.isfinite(self.load(0.0))
+
+    def scene_step(self, rod, F, scheme_step) -> float:
+        """`DT_FRACTION` of the stability limit 2/ω_max at ΔF = 0 (compression only lowers the
+        highest frequency) and, when the load is concrete, at most `GROWTH_FRACTION`/λ_max,
+        λ_max = F/(2√(EIρ)) the fastest growth rate of a loaded rod, so that fast-growing modes
+        stay resolved (benchmarks/README.md, field convergence)."""
+        unloaded = type(self).for_scene(rod, theory.reference_load(rod), self.size, 1)
+        omega = _static(lambda: jnp.max(unloaded.max_frequency()),
+                        "Scene.dt must be given explicitly when the rod's stiffness parameters are traced "
+                        "(e.g. vmapped over EI, rho or R): the step is a static setting.")
+        dt = DT_FRACTION * 2.0 / omega
+        try:
+            with jax.ensure_compile_time_eval():
+                lam = float(F / (2 * jnp.sqrt(rod.EI * rod.rho)))
+        except jax.errors.ConcretizationTypeError:
+            return dt
+        return min(dt, GROWTH_FRACTION / lam) if lam > 0 else dt
+
+
+def _forward(name):
+    return lambda self, *args, **kwargs: getattr(self.inner, name)(*args, **kwargs)
+
+
+class _Forced(AbstractModel):
+    """A model with a constant extra acceleration `extra` (`under_lateral_force`): every method
+    of the interface is the inner model's, the accelerations plus `extra`."""
+
+    inner: AbstractModel
+    extra: Float[Array, " n"]
+
+    # the class constants of every per-DOF model (`AbstractDOFModel`, the only models it wraps)
+    held_is_fixed: ClassVar[bool] = True
+    scheme: ClassVar[str] = "verlet"
+    size_name: ClassVar[None] = None
+    min_size: ClassVar[int] = 1
+    search_method: ClassVar[str] = "departure"
+    sweep_lanes: ClassVar[None] = None
+
+    def acceleration(self, q, t):
+        return self.inner.acceleration(q, t) + self.extra
+
+    def accelerations(self, q, v, t):
+        return self.inner.accelerations(q, v, t) + self.extra
+
+    def under_lateral_force(self, force):
+        return _Forced(self.inner, self.extra + self.inner.from_samples(force / (self.rod.rho * self.rod.R)))
+
+    def for_tangents(self):
+        return _Forced(self.inner.for_tangents(), self.extra)
+
+    rod = property(lambda self: self.inner.rod)
+    autonomous = property(lambda self: self.inner.autonomous)
+    buckle_threshold = property(lambda self: self.inner.buckle_threshold)
+    resolved_modes = property(lambda self: self.inner.resolved_modes)
+    size = property(lambda self: self.inner.size)
+    (friction_bounds, energy_terms, kinetic_energy, max_frequency, linear_flow, check, kick, drift,
+     friction_update, friction_acceleration, impulse_work, amplitude, is_stuck, stop_measures, observables,
+     sample_points, from_samples, perturbed_state, translation, scene_step, initial_state_under, field_of,
+     dominant_mode) = map(_forward, (
+        "friction_bounds", "energy_terms", "kinetic_energy", "max_frequency", "linear_flow", "check", "kick",
+        "drift", "friction_update", "friction_acceleration", "impulse_work", "amplitude", "is_stuck",
+        "stop_measures", "observables", "sample_points", "from_samples", "perturbed_state", "translation",
+        "scene_step", "initial_state_under", "field_of", "dominant_mode"))
+
+    @classmethod
+    def for_scene(cls, rod, F, size, mode):
+        raise TypeError("a forced model is made by under_lateral_force, not by a scene.")
+
+    default_size = for_scene
+
+    @classmethod
+    def scheme_under(cls, perturbation):
+        return None
+
+    @classmethod
+    def bytes_per_member(cls, size):
+        return AbstractDOFModel.bytes_per_member(size)
