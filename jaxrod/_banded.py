@@ -5,7 +5,7 @@ couples only neighbouring nodes and segments: ordered as blocks (x_k, φ_k) of s
 block tridiagonal. `block_tridiagonal_solve` factors it by the block Thomas algorithm (a block
 Cholesky: Sₖ = Dₖ − Uₖ₋₁ᵀ Sₖ₋₁⁻¹ Uₖ₋₁) in one forward and one backward `lax.scan` over the
 blocks, each 6×6 Cholesky factor and triangular solve written out entry by entry: a small
-loop body that XLA compiles as one function on the CPU (`jaxrod._xla`), about 10× faster than
+loop body that XLA compiles as one function on the CPU (`jaxrod._xla`), much faster than
 the same scan with `jnp.linalg.solve` (LAPACK) for each block (`benchmarks/rod3d_implicit_parts.py`).
 A parallel (cyclic) reduction would take log₂ n levels of batched 6×6 products but compiles each
 level separately; the scan is the smallest program.

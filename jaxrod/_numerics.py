@@ -32,7 +32,7 @@ def computed_once(values, ref: Float[Array, "..."]):
 
     XLA on CPU fuses a chain of cheap elementwise operations into every kernel that reads its
     result: a value read by k kernels is recomputed k times (in the 3D rod's friction pass a
-    slip impulse was recomputed in every kernel that updates a velocity, 3–4× the unique
+    slip impulse was recomputed in every kernel that updates a velocity, several times the unique
     arithmetic). It never duplicates a division, so dividing by a 1 it cannot prove to be 1
     (NaN where `ref` is NaN, 1 elsewhere; `ref` any array of the state of the values' own shape,
     not a constant and not a broadcast, which XLA would turn into a multiplication) makes

@@ -2,10 +2,9 @@
 coefficients of a rotation's exponential (`rodrigues`) and logarithm (`atan_sqrt`) built on them.
 
 XLA on the CPU evaluates `jnp.sin`, `jnp.cos` and `jnp.arctan2` in float64 one element at a
-time through the C library: measured on the 2-core CPU of the benchmarks, 10, 10 and 14 ns per
-element, against 0.1–1 ns for a multiplication, division or square root in a fused kernel. The
-3D rod's step calls them for every segment (the drift's rotation, the curvature's logarithm,
-the amplitude), which at 500 segments was a sixth of the step. Here they are the classical
+time through the C library, an order of magnitude slower than a multiplication, division or
+square root in a fused kernel (benchmarks/README.md gives the measurement). The 3D rod's step
+calls them for every segment (the drift's rotation, the curvature's logarithm, the amplitude). Here they are the classical
 range-reduced polynomial approximations (sine and cosine: fdlibm's kernels on |r| ≤ π/4 after a
 three-part Cody–Waite reduction by π/2, exact for |x| < 2²⁰·π/2; arctangent: Cephes' rational
 approximation with its reduction to |t| ≤ 0.66), written with elementwise operations only, so

@@ -1,19 +1,18 @@
 """How jaxrod asks XLA to compile loops on the CPU: each loop as one function.
 
 Since JAX 0.7 the CPU backend runs a compiled program as a sequence of kernels ("thunks"),
-one per fusion, each dispatched at a cost of the order of 0.1 µs. A jaxrod run is a loop over
+one per fusion, each dispatched at a fixed cost. A jaxrod run is a loop over
 steps whose body is hundreds of small fused kernels (the 3D rod's step at 60 segments: about
 300, plus about 70 per friction sweep), so on small problems the dispatch is most of the time.
 XLA compiles a `while` loop whose body touches fewer bytes per iteration than
 `xla_cpu_small_while_loop_byte_threshold` (1 kB by default) into one function instead
 (`SmallWhileLoopHoistingPass`). Raising that threshold to `SMALL_LOOP_BYTES` makes every
-jaxrod loop on arrays of ordinary size one function. Measured on a 2-core CPU
-(`benchmarks/xla_loops.py`, benchmarks/README.md "XLA's loop option"): one 3D rod at 60
-segments 2.9× faster, the field model at batch 1 2.0×, the single-mode v₀* search 2.0×, a batch
-of 1024 field rods unchanged; compilation 0.9–1.5× as long. The results are the same up to
-rounding (the compiler's choice of fused multiply–adds). The continuous-batching pool does not
-gain: its lanes' steps are already arithmetic-bound (a pool without scatters, which XLA then
-compiles as one function, measured no faster: benchmarks/README.md, sweeps).
+jaxrod loop on arrays of ordinary size one function. What it gains (small problems run
+several times faster, large batches are unchanged, compilation takes a little longer) is
+measured by `benchmarks/xla_loops.py` (benchmarks/README.md, "XLA's loop option"). The
+results are the same up to rounding (the compiler's choice of fused multiply–adds). The
+continuous-batching pool does not gain: its lanes' steps are already arithmetic-bound
+(benchmarks/README.md, sweeps).
 
 `configure` is called when jaxrod is imported: it adds the option to the environment variable
 `XLA_FLAGS` unless the user set `xla_backend_extra_options` there already (their choice is

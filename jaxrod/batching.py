@@ -2,8 +2,8 @@
 as soon as its own has stopped, inside one compiled loop.
 
 A vmapped batch of runs that each loop until they stop waits for its slowest member: a map
-whose members stop after 13 ms of simulated time on average and 113 ms at most keeps its lanes
-busy 12 % of the time. Here the lanes advance together `refill_every` steps at a time; after
+whose runs stop at widely different times keeps its lanes busy a small part of the time
+(benchmarks/README.md, sweeps, gives the measured share). Here the lanes advance together `refill_every` steps at a time; after
 each round, every lane whose run has finished writes its state back and takes the next
 pending run (no host round trip). A run takes exactly the steps of its single run, whatever the
 lane it lands in, so results do not depend on `B`, the chunking or the device count.

@@ -20,38 +20,28 @@ RULES = {
 
 
 def choose_model(perturbation: str, dF: float, mu: float) -> tuple[str, int | None]:
-    """A cheap model, with its resolution, whose answer is within 2 % of the finest field
-    model's, as measured by `benchmarks/model_choice.py` on the reference rod (table in
-    benchmarks/README.md, "Which model for which scene"): the cheapest measured one, unless a
-    slightly dearer one holds over the whole load range (said below where so).
+    """A cheap model, with its resolution, whose answer is within the tolerance of
+    `benchmarks/model_choice.py` of the finest field model's on the reference rod: the cheapest
+    measured one, unless a slightly dearer one holds over the whole load range. The measurements
+    behind each row, with their commit, are the table "Which model for which scene" in
+    benchmarks/README.md.
 
-    The rule, and the measurements behind it (relative errors against the finest field model:
-    768 nodes for the sine scenes, 1536 for the random ones; horizon 0.5 s; critical values by
-    bisection):
+    The rule (`RULES`):
 
-    - `"sine"` (mode-6 lateral velocity), ΔF ≤ 1 N: the single-mode oscillator, `("mode",
-      None)`. Its critical speed v₀* is 0.17 % off at ΔF = 1 N, but 5.5 % off at 5 N and 69 %
-      at 20 N, where friction feeds the odd harmonics of mode 6 (18, 30, …).
-    - `"sine"`, 1 N < ΔF ≤ 20 N: the field model with 128 nodes (v₀* 0.67 % off at 5 N and
-      0.17 % at 20 N; 64 nodes are 3.7 % off at 5 N). Past 20 N: 384 nodes (the package's
-      `default_nodes`; field_convergence.py: 128 nodes are 2.2 % off at 60 N, 384 within
-      0.3 %). Models that land within 2 % at one load only (32 nodes at 20 N but 14 % off at
-      5 N) are not picked; Galerkin with 32 modes was also within 2 % at 5 and 20 N (0.17 %,
-      1.1 %) at about the same cost, but its accuracy past 20 N was not measured.
-    - `"random-position"` (forces for 1 ms, then released): the field model with 384 nodes
-      (mean critical load δF* 1.2 % off at μ = 0.05 and 0.34 % at μ = 1, same dominant
-      mode; 128 nodes are 11 % and 6.2 % off; Galerkin with 64 modes is within 2 % too but
-      runs 6-20× longer).
-    - `"random-velocity"`: the field model with 768 nodes (δF* 0.47 % off at μ = 0.05 and
-      0.41 % at μ = 1, same dominant mode; 384 nodes are 8.9 % and 2.6 % off, 128 nodes 75 %
-      and 19 %). The perturbation, drawn on the reference paper's 500 segments, puts as much
-      energy in mode 499 as in mode 6, and pointwise friction couples them all: a model that
-      does not resolve the whole perturbation gets the critical load wrong.
+    - `"sine"` (mode-6 lateral velocity), ΔF ≤ `SINGLE_MODE_MAX_DF`: the single-mode oscillator,
+      `("mode", None)`; above it friction feeds the odd harmonics of mode 6 (18, 30, …) and the
+      single mode drifts off.
+    - `"sine"` up to `FINE_FIELD_DF`: the field model with 128 nodes; past it, where more than 32
+      modes are unstable, 384 nodes (the package's `default_nodes`).
+    - `"random-position"` (forces for 1 ms, then released): the field model with 384 nodes.
+    - `"random-velocity"`: the field model with 768 nodes. The perturbation, drawn on the
+      reference paper's 500 segments, puts as much energy in mode 499 as in mode 6, and pointwise
+      friction couples them all: a model that does not resolve the whole perturbation gets the
+      critical load wrong.
     - `"random-shape"` (not measured): as `"random-velocity"`, a white-noise state too.
 
-    The measured choice did not depend on μ (0.05 and 1 for the random scenes; the sine scenes
-    were measured at μ = 0.3), so `mu` is only checked. The thresholds are in newtons of the
-    reference rod; for another rod they are a heuristic.
+    The measured choice did not depend on μ, so `mu` is only checked. The thresholds are in
+    newtons of the reference rod; for another rod they are a heuristic.
 
     **Arguments:**
 

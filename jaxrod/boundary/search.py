@@ -82,7 +82,7 @@ def _method_of(method, model, perturbation="sine"):
 
 def _confirms(model) -> bool:
     """Whether a departure-rate search confirms its root with a stable run: for a model whose
-    default search is not the departure rate (the 3D rod's is not linear within 1 % of its root)."""
+    default search is not the departure rate (the 3D rod's is not linear near its root)."""
     return model_class(model).search_method != "departure"
 
 
@@ -99,7 +99,7 @@ def _label(scene_of, t1):
 
 def _search(scene_of, lo, hi, lam, method, start, rtol, max_iter, t1, geometric, confirm=False, atol=0.0):
     """The root of the label of `scene_of(x)` in [lo, hi] by `method` (`confirm`: see
-    `departure_secant`; the 3D rod's departure rate is not linear within 1 % of its root)."""
+    `departure_secant`; the 3D rod's departure rate is not linear near its root)."""
     if method == "bisection":
         return _named(bisection(_label(scene_of, t1), lo, hi, rtol, max_iter, geometric=geometric, atol=atol))
     return departure_secant(lambda x: departure_rate(scene_of, x, t1), lo, hi, lam, start=start,

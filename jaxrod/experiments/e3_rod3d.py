@@ -1,7 +1,7 @@
 """E3 with the full model: the stable-zone boundary v₀*(ΔF) of the 3D rod and its exponent.
 
 The field model's map (`experiments.e3`) fits v₀ ∝ ΔF^p to a grid of 20 × 24 runs. The 3D rod
-costs 10⁴ times more per run, so its boundary is found point by point: at each load, label
+costs orders of magnitude more per run (benchmarks/README.md), so its boundary is found point by point: at each load, label
 bisection in v₀ on the common engine's scene ([`jaxrod.scene.Scene`][] `kind="rod3d"`: dead
 load F⁰₆ + ΔF, friction at the contact point, sine mode-6 lateral velocity, buckled when
 max|θ| passes 0.5 rad, a run stops when it buckles or sticks; the same run built directly so

@@ -13,9 +13,9 @@ the buckling threshold) to a relative bracket of 1 %, started from the field mod
   a factor `WIDTH` either side of the field model's ΔF* for the same perturbation (for B on 499
   nodes, the random grid resolved), squared while the bracket holds no boundary, up to
   `WIDTH`⁴; horizon 0.5 s. The 3D rod never sticks (it rocks on the wall, rolling without
-  slip), so a stable run lasts the whole horizon: 2 s (the field model's search) costs 4× more
-  and gave the same bracket (μ = 0.05, realization 0, 500 segments: [1.939, 1.947] N at 2 s,
-  [1.940, 1.953] N at 0.5 s). 5 μ × 9 points: about 4 h at 500 segments on one core.
+  slip), so a stable run lasts the whole horizon: the field model's 2 s costs four times the
+  runs and gave the same bracket as 0.5 s where both were run (docs/rod3d.md gives the brackets
+  and the cost).
 - **E5**: on E4's points of B and C, one run of each model at 1.05 times its own ΔF*, with the
   step of its search (near the boundary a 3D label can turn with a step 2·10⁻⁴ apart), and the
   dominant mode of θ at the stop with its share of the power (a few seconds a run at 500

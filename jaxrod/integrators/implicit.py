@@ -23,9 +23,9 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
     model's choice of the stiffness it damps (the 3D rod: shear, bend and twist, not stretch or the wall,
     `jaxrod.rod3d.hessian`): damping ratio γ h ω / 2 in such a mode of frequency ω. Without it
     the stiff modes that the friction pass excites at every stick–slip event keep their amplitude,
-    aliased to the step's Nyquist frequency, and the friction pass reads them as slip (at 60
-    segments, μ = 0.3, ΔF = 5 N, γ = 0 moved v₀* by −2 % at h = 3e-5 s and −12 % at 1e-4 s, and a
-    step of 3e-4 s blew up: `docs/rod3d.md`). The stiffness is linearised at qₙ (one linear
+    aliased to the step's Nyquist frequency, and the friction pass reads them as slip (without
+    the damping v₀* moves with the step, and large steps blow up: `docs/rod3d.md`, "The implicit
+    step", gives the measurements). The stiffness is linearised at qₙ (one linear
     solve per step, no Newton iteration: nothing to fail to converge; a matrix that is not positive
     definite gives a non-finite state and the result code `nonfinite`). The model must provide
     `implicit_kick(q, v, a, hk, h, beta, gamma)` and `implicit_step` ([`jaxrod.rod3d.Rod3D`][]: a

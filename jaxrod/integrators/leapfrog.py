@@ -23,7 +23,7 @@ class ProjectedLeapfrog(AbstractProjected):
     schemes differ by a local error of first order, the order of both. A degree of freedom held
     by static friction has exactly zero velocity and does not move (the hold condition is the
     same, |W⁻¹u| ≤ μ_s N h for the whole step). For models whose friction pass is most of the
-    step (the 3D rod: 1.4–1.6× fewer µs per step than projected Verlet, measured at 77a7f3a, docs/rod3d.md)
+    step (the 3D rod: cheaper per step than projected Verlet, docs/rod3d.md)
     it was the default before [`jaxrod.ImplicitLeapfrog`][] (which keeps this structure with an
     implicit kick); the reduced models keep projected Verlet.
 

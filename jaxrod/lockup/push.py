@@ -199,10 +199,9 @@ def push(rod: RodChannel, F_max: float, rate: float, *, unload: bool = True, n: 
 
     Force and not a set pushing speed against a held far end: the rod is axially stiff (EA/F₀ ≈
     6·10⁵ for the reference material at r/ℓ = 0.02), so a push at mm/s raises the entry force by
-    hundreds of F₀ per second before the rod can buckle (measured: μL/ℓ = 1, 5 mm/s: the state
-    non-finite within 0.4 s, the rod whipping round the channel); a load raised in steps leaves
-    the friction wherever the step's overshoot put it (measured: (F_in − F_far)/μwL between 0 and
-    0.33 after steps of F₀/2 on a short rod, against 0.97 under a ramp). With its far end held the
+    hundreds of F₀ per second before the rod can buckle (the state turns non-finite, the rod
+    whipping round the channel); a load raised in steps leaves the friction wherever the step's
+    overshoot put it, far from the soft string's μwL that a ramp reaches (docs/physics.md §8). With its far end held the
     rod slides only as far as it is compressed: see `inject` for a rod that slides.
 
     **Returns:** a dict of NumPy arrays over the saves (`n_save` per phase; the unloading
@@ -229,8 +228,8 @@ def inject(rod: RodChannel, F_far: float, speed: float, duration: float, *, unlo
     against the dead load `F_far` [N] (`Rod3D.far_load`: a bit pressed on the rock, a catheter tip
     against a vessel). The rod slides toward the far end all along, as the soft-string law
     assumes. `scheme` and `dt` [s]: the integrator (a key of `jaxrod.integrators.SCHEMES`; default
-    the implicit leapfrog, the 3D rod's, whose entry force at μL/ℓ = 1, far load 2.5 F₀ is the
-    explicit scheme's within 0.3 % at 37 and 74 segments: `benchmarks/rod3d_implicit_gates.py`)
+    the implicit leapfrog, the 3D rod's, whose entry force was checked against the explicit
+    scheme's: `benchmarks/rod3d_implicit_gates.py`)
     and its step (default: the implicit scheme's own, or `dt_fraction` × the explicit limit for
     `"leapfrog"`/`"verlet"`).
     **Returns:** as `push`, with `F_in` the entry's axial support force [N] and `F_far`

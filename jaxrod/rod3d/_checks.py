@@ -21,8 +21,7 @@ def check_arguments(model) -> None:
     """Raise `ValueError` for the first argument of `model` (a `Rod3D`) out of its range, or for a
     rod in single precision: the 3D rod's positions and forces need float64 (in float32 the
     rounding of the stiff axial and shear forces, ~1e-7 of EA, is larger than the friction that
-    holds a rod in its stable zone: measured, a sine 5 mm/s rod at ΔF = 5 N, μ = 0.3 buckles at
-    46 ms in float32 and stays stuck in float64)."""
+    holds a rod in its stable zone: a rod that sticks in float64 can buckle in float32)."""
     dtype = np.dtype(getattr(model.rod.L, "dtype", np.float64))
     if dtype != np.float64:
         raise ValueError(f"Rod3D.rod has dtype {dtype}: the 3D rod needs float64; call "

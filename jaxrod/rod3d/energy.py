@@ -107,7 +107,7 @@ def generalized_forces(model, x, Q):
 
 
 def _pen_three_halves(delta):
-    """max(δ, 0)^{3/2} as δ√δ (a power costs ~15× a square root on CPU), with a zero (not
+    """max(δ, 0)^{3/2} as δ√δ (a power costs many square roots on the CPU), with a zero (not
     NaN) derivative where there is no penetration."""
     pos = delta > 0
     pen = jnp.where(pos, delta, 0.0)

@@ -29,10 +29,10 @@ the kick assembles β H + γ H_d in one pass, every piece being linear in the st
 a damping ratio γhω/2 in a mode of frequency ω: the stiff shear and twist modes and the bending
 modes near the segment scale, which ωh ≫ 1 aliases and the friction pass excites at every
 stick–slip event, are damped within a few steps. Stretch and the wall are not damped: damping
-the whole H moved the lock-up scene's entry force by +2.8 % (stretch: the axial vibrations of
-stick–slip; the steady slide's force comes through the axial springs), and leaving bending out
-as well moved E3's v₀* at 500 segments and 1–2 N by −2.5 to −2.7 % (its segment-scale bending
-modes alias at 5e-5 s) (docs/rod3d.md, "The implicit step"). The gyroscopic couple ω × Jω, contact and viscous damping stay explicit. Held
+the whole H moved the lock-up scene's entry force (stretch: the axial vibrations of stick–slip;
+the steady slide's force comes through the axial springs), and leaving bending out as well moved
+E3's v₀* at 500 segments (its segment-scale bending modes alias): docs/rod3d.md, "The implicit
+step", gives both measurements. The gyroscopic couple ω × Jω, contact and viscous damping stay explicit. Held
 degrees of freedom are taken out of the system (their rows and columns), and the friction pass
 follows the kick as in the explicit scheme.
 """
@@ -209,7 +209,7 @@ def _assembled(model, x, Q, weights=ALL, wall_weight=1.0):
 def hessian_blocks_ad(model, x, Q, damped: bool = False):
     """The exact Hessian of the potential in the blocks of `hessian_blocks`, by forward-over-
     reverse AD of each element's energy (the bend and twist terms that the Gauss–Newton blocks
-    leave out included): the reference the tests hold `hessian_blocks` to; 5–20× slower.
+    leave out included): the reference the tests hold `hessian_blocks` to; several times slower.
     `damped`: of the energies `DAMPED` weights (no stretch, no wall)."""
     rod, n, l0 = model.rod, model.n, model.l0
     dtype = x.dtype

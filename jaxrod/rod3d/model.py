@@ -81,8 +81,8 @@ class Rod3D(AbstractModel):
       twists the rod) or `"axis"` (at the centre line: sliding only, no rolling, as the reduced
       models assume) (static).
     - `friction_precision`: `"float32"` (default) or `"float64"`, the dtype of the friction pass
-      (static; positions and forces stay float64, docs/physics.md §7): a 500-segment step 15 %
-      cheaper, amplitudes moved ~1e-6 relative; a `friction_tol` below ~1e-6 is not reached;
+      (static; positions and forces stay float64, docs/physics.md §7, which gives the step's
+      saving and the amplitudes' change); a `friction_tol` below ~1e-6 is not reached;
       forward-mode derivatives run in float64 (`for_tangents`).
     - `body_force`: extra force per length [N/m], a 3-vector or one per node (n + 1, 3) (default 0).
     - `gravity`: include gravity (static, default True).
