@@ -1,7 +1,10 @@
-"""Bracketing search on a buckled/stable label (the robust baseline for boundary search)."""
+"""Bracketing search on a buckled/stable label: `bisect`, deprecated in favour of
+[`jaxrod.boundary.roots.bisection`][] (the same search, with a result code, an evaluation count
+and a tolerance)."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
 import jax
@@ -19,6 +22,7 @@ def bisect(
     geometric: bool = True,
 ) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """Bisection on a monotone label: `buckles(x)` is False at `lo` and True at `hi`.
+    Deprecated: use [`jaxrod.boundary.roots.bisection`][] (it warns once per call).
 
     Pure and vmappable (vmap over `lo`, `hi` and whatever `buckles` closes over). The label is
     evaluated once per iteration; the bracket shrinks by 2 each time (in log space when
@@ -27,6 +31,9 @@ def bisect(
     **Returns:** the final bracket `(lo, hi)`; the boundary lies between them if the label is
     monotone. Check the initial bracket with the label yourself if unsure.
     """
+
+    warnings.warn("jaxrod.search.bisect is deprecated: use jaxrod.boundary.roots.bisection.", DeprecationWarning,
+                  stacklevel=2)
 
     def body(_, bracket):
         lo, hi = bracket
