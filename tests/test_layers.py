@@ -119,7 +119,7 @@ def test_every_equation_the_code_cites_is_in_docs_physics():
     import re
 
     doc = (PKG.parent / "docs" / "physics.md").read_text()
-    labels = set(re.findall(r"\(P(\d+)\)", doc))
+    labels = {a or b for a, b in re.findall(r"\(P(\d+)\)|\\tag\{P(\d+)\}", doc)}  # "(P1)" or MathJax's \tag{P1}
     sections = set(re.findall(r"^## (\d+)\.", doc, flags=re.M))
     cited_p, cited_s = set(), set()
     for f in PKG.rglob("*.py"):
