@@ -157,7 +157,26 @@ class SineVelocity(AbstractPerturbation):
         return jnp.zeros_like(v), v
 
 
-class RandomVelocity(AbstractPerturbation):
+class _AbstractNoiseState(AbstractPerturbation):
+    """A random state drawn on the scene's noise grid (`amplitude`, `key`, `grid`): every mode of the
+    grid carries as much as the critical one, so a model must resolve them all."""
+
+    amplitude: eqx.AbstractVar[Float[Array, ""]]
+    key: eqx.AbstractVar[PRNGKeyArray]
+    grid: eqx.AbstractVar[int | None]
+
+    @classmethod
+    def from_settings(cls, amplitude, mode, key, duration):
+        return cls(amplitude, key)
+
+    @property
+    def least_nodes(self) -> int:
+        """grid − 1: its high modes decide the result (their vibration releases static friction;
+        benchmarks/README.md, "Which model for which scene")."""
+        return 0 if self.grid is None else self.grid - 1
+
+
+class RandomVelocity(_AbstractNoiseState):
     """A lateral velocity of at most `amplitude` [m/s], drawn uniformly in [−`amplitude`,
     `amplitude`] on every node of the scene's noise grid (`grid` segments, static; see the
     module) from `key`; the rod straight."""
@@ -166,22 +185,12 @@ class RandomVelocity(AbstractPerturbation):
     key: PRNGKeyArray
     grid: int | None = eqx.field(static=True, default=GRID)
 
-    @classmethod
-    def from_settings(cls, amplitude, mode, key, duration):
-        return cls(amplitude, key)
-
-    @property
-    def least_nodes(self) -> int:
-        """grid − 1: its high modes decide the result (their vibration releases static friction;
-        docs/glossary.md and benchmarks/README.md, "Which model for which scene")."""
-        return 0 if self.grid is None else self.grid - 1
-
     def fields(self, model):
         s = model.sample_points()
         return jnp.zeros_like(s), _noise(self, model, s)
 
 
-class RandomShape(AbstractPerturbation):
+class RandomShape(_AbstractNoiseState):
     """A lateral displacement of at most `amplitude` [m], drawn uniformly in [−`amplitude`,
     `amplitude`] on every node of the scene's noise grid (`grid` segments, static) from `key`,
     released from rest."""
@@ -189,16 +198,6 @@ class RandomShape(AbstractPerturbation):
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     key: PRNGKeyArray
     grid: int | None = eqx.field(static=True, default=GRID)
-
-    @classmethod
-    def from_settings(cls, amplitude, mode, key, duration):
-        return cls(amplitude, key)
-
-    @property
-    def least_nodes(self) -> int:
-        """grid − 1: its high modes decide the result (their vibration releases static friction;
-        docs/glossary.md and benchmarks/README.md, "Which model for which scene")."""
-        return 0 if self.grid is None else self.grid - 1
 
     def fields(self, model):
         s = model.sample_points()

@@ -139,34 +139,11 @@ def critical_velocity(
     dv₀*/dp for p in `sensitivities` (names: `mu` (μ_s and μ_d moved together), `dF`, `R`, any
     rod field) by the implicit function theorem.
     """
-    dtype = jnp.result_type(float)
-    dF = jnp.asarray(dF, dtype)
-    key = jax.random.key(0) if key is None else key
-    method = _method_of(method, model, perturbation)
-    rod_of = lambda p: _rod_of(type(rod), p)
-    params = _params_of(rod, dF=dF)
-
-    if method == "exact":
-        def g2(v0, p):
-            r = rod_of(p)
-            F = theory.reference_load(r) + p["dF"]
-            m = model_class(model).for_scene(r, F, None, mode)
-            return single_mode_indicator(v0 / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
-
-        res = _named(safeguarded_newton(lambda v: g2(v, params), bracket[0], bracket[1], rtol, max_iter))
-        sub = {k: params[k] for k in sensitivities}
-        sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub) if sub else {}
-        return res, sens
-
-    n, dt = _resolution(rod, dF, model, n, mode, dt, perturbation)
-    scene_of2 = lambda v0, p: _scene(rod_of(p), p["dF"], v0, model, n, mode, dt, perturbation, key)
+    dF = jnp.asarray(dF, jnp.result_type(float))
     lam = theory.max_growth_rate(rod, theory.reference_load(rod) + dF)
-    res = _search(lambda v: scene_of2(v, params), bracket[0], bracket[1], lam, method, start, rtol,
-                  max_iter, t1, True, _confirms(model))
-    sub = {k: params[k] for k in sensitivities}
-    # the lowest buckled run lies within about rtol of the root: the tangents there give dv₀*/dp
-    sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
-    return res, sens
+    return _critical(rod, dict(dF=dF), lambda v0, p: (p["dF"], v0), bracket[0], bracket[1], start, rtol, 0.0, True,
+                     lam, dF, _IDENTITY, model=model, perturbation=perturbation, mode=mode, n=n, dt=dt, key=key,
+                     method=method, max_iter=max_iter, t1=t1, horizon=horizon, sensitivities=sensitivities)
 
 
 def critical_load(
@@ -202,37 +179,53 @@ def critical_load(
     """
     dtype = jnp.result_type(float)
     amplitude = jnp.asarray(amplitude, dtype)
-    key = jax.random.key(0) if key is None else key
-    method = _method_of(method, model, perturbation)
-    rod_of = lambda p: _rod_of(type(rod), p)
-    params = _params_of(rod, amplitude=amplitude)
     # Loads span decades and the runs depend on them through λ ∝ √ΔF: search log ΔF.
     lo, hi = jnp.log(jnp.asarray(bracket[0], dtype)), jnp.log(jnp.asarray(bracket[1], dtype))
     y0 = None if start is None else jnp.log(jnp.asarray(start, dtype))
     log_tol = math.log1p(rtol)  # a bracket of relative width `rtol` in ΔF is one of log1p(rtol) in log ΔF
-    to_load = lambda res: eqx.tree_at(lambda r: (r.root, r.lo, r.hi), res,
-                                      (jnp.exp(res.root), jnp.exp(res.lo), jnp.exp(res.hi)))
+    F0 = theory.reference_load(rod)
+    lam = lambda y: theory.max_growth_rate(rod, F0 + jnp.exp(y))
+    return _critical(rod, dict(amplitude=amplitude), lambda dF, p: (dF, p["amplitude"]), lo, hi, y0, 0.0, log_tol,
+                     False, lam, bracket[1], _LOG, model=model, perturbation=perturbation, mode=mode, n=n, dt=dt,
+                     key=key, method=method, max_iter=max_iter, t1=t1, horizon=horizon, sensitivities=sensitivities)
+
+
+# the search variable y of a root x: (x of y, the result in x); v₀ is searched as is, ΔF as log ΔF
+_IDENTITY = (lambda y: y, lambda res: res)
+_LOG = (jnp.exp, lambda res: eqx.tree_at(lambda r: (r.root, r.lo, r.hi), res,
+                                         (jnp.exp(res.root), jnp.exp(res.lo), jnp.exp(res.hi))))
+
+
+def _critical(rod, known: dict, point, lo, hi, start, rtol, atol, geometric, lam, size_load, variable, *, model,
+              perturbation, mode, n, dt, key, method, max_iter, t1, horizon, sensitivities):
+    """The critical value x of a search in y (`variable`: x of y, and the result back in x) over
+    [`lo`, `hi`], the rod's other value `known` (`dF` or `amplitude`), `point(x, params)` the
+    (ΔF, amplitude) of a run; the single mode's closed form (`"exact"`) or runs of scenes at the
+    static resolution of the load `size_load`. **Returns:** `(RootResult, sensitivities)` in x."""
+    x_of, back = variable
+    key = jax.random.key(0) if key is None else key
+    method = _method_of(method, model, perturbation)
+    rod_of = lambda p: _rod_of(type(rod), p)
+    params = _params_of(rod, **known)
+    sub = {k: params[k] for k in sensitivities}
 
     if method == "exact":
-        def g2(dF, p):
+        def g2(x, p):
             r = rod_of(p)
-            F = theory.reference_load(r) + dF
-            m = model_class(model).for_scene(r, F, None, mode)
-            return single_mode_indicator(p["amplitude"] / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
+            dF, amplitude = point(x, p)
+            m = model_class(model).for_scene(r, theory.reference_load(r) + dF, None, mode)
+            return single_mode_indicator(amplitude / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
 
-        res = _named(to_load(safeguarded_newton(lambda y: g2(jnp.exp(y), params), lo, hi, 0.0, max_iter,
-                                                geometric=False, atol=log_tol)))
-        sub = {k: params[k] for k in sensitivities}
+        res = _named(back(safeguarded_newton(lambda y: g2(x_of(y), params), lo, hi, rtol, max_iter,
+                                             geometric=geometric, atol=atol)))
         sens = implicit_sensitivities(lambda x, s: g2(x, {**params, **s}), res.root, sub) if sub else {}
         return res, sens
 
-    n, dt = _resolution(rod, bracket[1], model, n, mode, dt, perturbation)
-    scene_of2 = lambda dF, p: _scene(rod_of(p), dF, p["amplitude"], model, n, mode, dt, perturbation, key)
-    F0 = theory.reference_load(rod)
-    lam = lambda y: theory.max_growth_rate(rod, F0 + jnp.exp(y))
-    res = to_load(_search(lambda y: scene_of2(jnp.exp(y), params), lo, hi, lam, method, y0, 0.0, max_iter,
-                          t1, False, _confirms(model), atol=log_tol))
-    sub = {k: params[k] for k in sensitivities}
+    n, dt = _resolution(rod, size_load, model, n, mode, dt, perturbation)
+    scene_of2 = lambda x, p: _scene(rod_of(p), *point(x, p), model, n, mode, dt, perturbation, key)
+    res = back(_search(lambda y: scene_of2(x_of(y), params), lo, hi, lam, method, start, rtol, max_iter, t1,
+                       geometric, _confirms(model), atol=atol))
+    # the lowest buckled run lies within about rtol of the root: the tangents there give dx/dp
     sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
     return res, sens
 

@@ -193,6 +193,11 @@ class AbstractRodDOFModel(AbstractDOFModel):
         ok = (r.mu_s >= 0) & (r.mu_d >= 0) & (r.mu_d <= r.mu_s) & (r.R > 0) & (r.EI > 0)
         return ok & jnp.isfinite(self.load(0.0))
 
+    @classmethod
+    def for_scene(cls, rod, F, size, mode):
+        """`from_rod(rod, size, F=F)` (the sine `mode` is not needed: every mode is modelled)."""
+        return cls.from_rod(rod, size, F=F)
+
     def scene_step(self, rod, F, scheme_step) -> float:
         """`DT_FRACTION` of the stability limit 2/ω_max at ΔF = 0 (compression only lowers the
         highest frequency) and, when the load is concrete, at most `GROWTH_FRACTION`/λ_max,

@@ -195,10 +195,6 @@ class FieldModel(AbstractRodDOFModel):
     size = property(lambda self: self.n_nodes)
 
     @classmethod
-    def for_scene(cls, rod, F, size, mode):
-        return cls.from_rod(rod, size, F=F)
-
-    @classmethod
     def default_size(cls, rod, F, perturbation) -> int:
         """`default_nodes` of the load, and at least the nodes the perturbation needs resolved
         (`AbstractPerturbation.least_nodes`)."""

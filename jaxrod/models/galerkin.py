@@ -164,10 +164,6 @@ class GalerkinModel(AbstractRodDOFModel):
     size = property(lambda self: self.n_modes)
 
     @classmethod
-    def for_scene(cls, rod, F, size, mode):
-        return cls.from_rod(rod, size, F=F)
-
-    @classmethod
     def default_size(cls, rod, F, perturbation) -> int:
         return DEFAULT_MODES
 
