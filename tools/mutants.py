@@ -15,6 +15,17 @@ killed / (made − equivalent), and the diff of every survivor.
     python tools/mutants.py rod3d --sample 60  # a random sample of a group's mutants
     python tools/mutants.py --full             # every mutant (models, rod3d, boundary: days)
 
+Held-out estimate of the whole engine (tools/mutants_heldout.py: what is mutated, what is left out
+and why, the per-mutant test cap and timeout, how a kill's cause is recorded):
+
+    python tools/mutants.py --held-out 400 --seed 7   # a fresh uniform sample; a seed is used once
+
+Staleness: the report keeps the sha256 of every mutated module (per group, and of the held-out
+run); `--stale` prints and writes into the report (and README.md's copy of its preamble)
+`stale: M of T mutated modules changed since their run`; `--changed` (`make mutants`) reruns
+the groups with a changed module (a stale held-out estimate takes a new seed, never a rerun).
+Equivalent mutants are keyed by their mutated line's text (tools/mutants_lib.py).
+
 A group whose every mutant would take hours on this CPU (each mutant compiles JAX functions for
 its tests) is run on a uniform random sample (`--sample K`, seed 0; by default the sizes in
 `SAMPLE`): the report then gives the sample's score with its 95 % Wilson interval, and the
@@ -27,8 +38,8 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import glob
 import json
-import math
 import os
 import random
 import re
@@ -38,7 +49,9 @@ import sys
 import tempfile
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+import mutants_heldout
+from mutants_lib import (ROOT, commit, equivalent_reason, load_equivalent, sha256, sha256_at, stale, stale_line,
+                         update_readme_frame, wilson)
 
 # group: (modules mutated, test files whose default tests may kill them)
 GROUPS = {
@@ -144,7 +157,21 @@ def run_group(name: str, jobs: int, only: list[str] | None = None, earlier: dict
     shutil.rmtree(work, ignore_errors=True)
     seconds = round(time.time() - t0, 1) + (earlier["seconds"] if only is not None and earlier else 0.0)
     return {"modules": modules, "tests": tests, "seconds": seconds, "status": status, "diffs": diffs,
-            "commit": _commit(), "date": str(datetime.date.today())}
+            "commit": commit(), "date": str(datetime.date.today()),
+            "module_hashes": {p: sha256(p) for p in _module_files(modules)}}
+
+
+def _module_files(modules: list[str]) -> list[str]:
+    """The files a group's module patterns name (as mutmut's only_mutate globs them)."""
+    return sorted(os.path.relpath(p, ROOT) for m in modules for p in glob.glob(os.path.join(ROOT, m))
+                  if p.endswith(".py"))
+
+
+def _backfill_hashes(results: dict) -> None:
+    """Groups run before the hashes were recorded: their modules' sha256 at the group's commit."""
+    for g in results.values():
+        if "module_hashes" not in g:
+            g["module_hashes"] = {p: sha256_at(g.get("commit", "HEAD"), p) for p in _module_files(g["modules"])}
 
 
 def summarise(group: dict, equivalent: dict) -> dict:
@@ -152,33 +179,26 @@ def summarise(group: dict, equivalent: dict) -> dict:
     for key, s in group["status"].items():
         counts[s if s in counts else "suspicious"] += 1
     made = len(group["status"])
-    eq = [k for k, s in group["status"].items() if k in equivalent and s not in ("killed", "not sampled")]
+    eq = [k for k, s in group["status"].items()
+          if s not in ("killed", "not sampled") and equivalent_reason(group["diffs"].get(k), equivalent)]
     counts["equivalent"] = len(eq)
     counts["made"] = made
     counts["run"] = made - counts["not sampled"]
     n = counts["run"] - len(eq)
     counts["score"] = counts["killed"] / n if n > 0 else float("nan")
-    counts["interval"] = _wilson(counts["killed"], n) if counts["not sampled"] and n > 0 else None
+    counts["interval"] = wilson(counts["killed"], n) if counts["not sampled"] and n > 0 else None
     return counts
 
 
-def _wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95 % Wilson score interval of a sampled kill rate k / n."""
-    p, d = k / n, 1 + z * z / n
-    c, h = (p + z * z / (2 * n)) / d, z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return c - h, c + h
-
-
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
-                              text=True).stdout.strip()
-    except OSError:
-        return "unknown"
-
-
-def write_report(results: dict, out: str):
-    equivalent = json.load(open(os.path.join(ROOT, "tools", "mutants_equivalent.json")))
+def write_report(results: dict, out: str, stamp: tuple[str, str] | None = None):
+    """report.md and report.json under `out` (and README.md's copy of the preamble when `out` is
+    results/mutation); `stamp` (commit, date) keeps the report's own when nothing was run."""
+    equivalent = load_equivalent()
+    _backfill_hashes(results)
+    hpath = os.path.join(out, "heldout.json")
+    held = json.load(open(hpath)) if os.path.exists(hpath) else None
+    st = stale({"groups": results}, held)
+    stamp = stamp or (commit(), str(datetime.date.today()))
     os.makedirs(out, exist_ok=True)
     rows, body = [], []
     total = {"made": 0, "run": 0, "killed": 0, "equivalent": 0}
@@ -192,25 +212,28 @@ def write_report(results: dict, out: str):
         rows.append(f"| {name} ({g.get('commit', '?')}, {g.get('date', '?')}) | {c['made']} | {c['run']} | {c['killed']} | {c['survived']} | {c['no tests']} | {c['timeout']} | "
                     f"{c['equivalent']} | {score} | {g['seconds']:.0f} s |")
         for key, diff in g["diffs"].items():
-            s = g["status"][key]
-            why = f" — equivalent: {equivalent[key]}" if key in equivalent else ""
-            body.append(f"### {key}: {s}{why}\n\n```diff\n{diff.strip()}\n```\n")
+            why = equivalent_reason(diff, equivalent)
+            body.append(f"### {key}: {g['status'][key]}{f' — equivalent: {why}' if why else ''}\n\n"
+                        f"```diff\n{diff.strip()}\n```\n")
     score = total["killed"] / max(total["run"] - total["equivalent"], 1)
-    head = [f"# Mutation testing (mutmut), commit {_commit()}, {datetime.date.today()}", "",
+    head = [f"# Mutation testing (mutmut), commit {stamp[0]}, {stamp[1]}", "",
             "Score = killed / (run − equivalent); a mutant without a test or that timed out counts as not killed. "
             "A group with fewer mutants run than made was run on a uniform random sample (seed 0); "
             "its score has the sample's 95 % Wilson interval.", "",
             "| group | made | run | killed | survived | no tests | timeout | equivalent | score | time |",
             "|---|---|---|---|---|---|---|---|---|---|", *rows, "",
             f"**All groups: {total['killed']} killed of {total['run'] - total['equivalent']} non-equivalent "
-            f"mutants run, {100 * score:.1f} %.**", "", "## Mutants not killed", ""]
+            f"mutants run, {100 * score:.1f} %.**", "",
+            *([mutants_heldout.headline(held), ""] if held else []), stale_line(st), ""]
+    extra = mutants_heldout.section(held, equivalent) if held else []
     with open(os.path.join(out, "report.md"), "w") as f:
-        f.write("\n".join(head + body))
+        f.write("\n".join(head + extra + ["## Mutants not killed", ""] + body))
     with open(os.path.join(out, "report.json"), "w") as f:
-        json.dump({"commit": _commit(), "date": str(datetime.date.today()),
-                   "groups": results},
-                  f, indent=1)
-    print("\n".join(head[:len(rows) + 8]))
+        json.dump({"commit": stamp[0], "date": stamp[1], "stale": st, "groups": results}, f, indent=1)
+    if os.path.abspath(out) == os.path.join(ROOT, "results", "mutation"):
+        update_readme_frame(os.path.join(out, "report.md"))
+    print("\n".join(head))
+    return st
 
 
 def main(argv=None) -> int:
@@ -223,15 +246,49 @@ def main(argv=None) -> int:
     p.add_argument("--sample", type=int, default=None,
                    help=f"run a uniform random sample of this many mutants per group (seed 0; default {SAMPLE})")
     p.add_argument("--full", action="store_true", help="every mutant of every group (no default samples)")
+    p.add_argument("--stale", action="store_true", help="only rewrite the report with its stale line")
+    p.add_argument("--changed", action="store_true",
+                   help="rerun the groups with a module changed since their run (`make mutants`)")
+    h = p.add_argument_group("held-out estimate (tools/mutants_heldout.py)")
+    h.add_argument("--held-out", type=int, metavar="N", help="draw N mutants of the whole engine and run them")
+    h.add_argument("--seed", type=int, help="the draw's seed (required with --held-out; used once)")
+    h.add_argument("--resume", action="store_true", help="go on with an unfinished draw of this seed")
+    h.add_argument("--budget", type=float, default=120.0, help="per mutant: stats seconds of tests run (cap)")
+    h.add_argument("--timeout-base", type=float, default=120.0, help="per mutant: timeout = this + 3 × estimate")
+    h.add_argument("--work", help="work folder (default: mutants/heldout-seedS)")
+    h.add_argument("--clear-jit", action="store_true", help="clear JAX's caches after each test of the stats run")
+    h.add_argument("--rev", default="HEAD", help="the commit to mutate (default HEAD; '' for the working tree)")
     a = p.parse_args(argv)
     bad = [g for g in a.groups if g not in GROUPS]
     if bad:
         p.error(f"argument groups: {bad} not among {list(GROUPS)}")
-    results = {}
+    results, stamp = {}, None
     path = os.path.join(a.out, "report.json")
     if os.path.exists(path):  # earlier groups of the same commit stay in the report
         old = json.load(open(path))
         results.update(old["groups"])  # each group's own commit is in the report
+        stamp = (old.get("commit", "?"), old.get("date", "?"))
+    if a.held_out is not None:
+        if a.seed is None:
+            p.error("--held-out needs --seed")
+        mutants_heldout.heldout(a.held_out, a.seed, a.out, a.work, a.budget, a.timeout_base, a.resume, a.clear_jit,
+                                a.rev or None)
+        write_report(results, a.out)
+        return 0
+    if a.stale or a.changed:
+        _backfill_hashes(results)
+        hpath = os.path.join(a.out, "heldout.json")
+        st = stale({"groups": results}, json.load(open(hpath)) if os.path.exists(hpath) else None)
+        print(stale_line(st) + (f": {', '.join(st['changed'])}" if st["changed"] else ""))
+        if st["heldout"]:
+            print("the held-out estimate is stale: draw a new one with a new seed (--held-out N --seed S)")
+        todo = (a.groups or st["groups"]) if a.changed else []
+        for g in todo:
+            results[g] = run_group(g, a.jobs, None, None, a.sample if a.sample is not None else SAMPLE.get(g))
+            write_report(results, a.out)
+        if not todo:
+            write_report(results, a.out, stamp)
+        return 0
     for g in a.groups or list(GROUPS):
         earlier = results.get(g) if a.survivors else None
         only = [k for k, v in earlier["status"].items() if v not in ("killed", "not sampled")] if earlier else None
