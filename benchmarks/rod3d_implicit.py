@@ -96,7 +96,7 @@ def measure(n, horizon, batch):
 
 
 def boundary_point(n=500):
-    from jaxrod.experiments.e3_rod3d import boundary_3d
+    from jaxrod.experiments.e3.rod3d import boundary_3d
 
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()

@@ -108,7 +108,7 @@ def e4(dt):
     ±15 mm/s, random position ±2 N/m for 1 ms; μ = 0.05, 0.3, 1; horizon 0.5 s, rtol 1e-2, bracket
     ×/÷ 1.5 around the field model's) with the implicit scheme at its default step, one row per
     point, against the explicit scheme's committed row (results/paper/e4/rod3d_n500.csv)."""
-    from jaxrod.experiments.paper3d import e4_point
+    from jaxrod.experiments.e4.rod3d import e4_point
 
     with open(os.path.join(os.path.dirname(HERE), "results", "paper", "e4", "rod3d_n500.csv"), newline="") as fh:
         ref = {(r["case"], float(r["mu"])): r for r in csv.DictReader(fh)
@@ -132,7 +132,7 @@ def e4_gamma(gammas, case="C", mu=0.05):
     import equinox as eqx
 
     from jaxrod import perturbations
-    from jaxrod.experiments.paper3d import e4_point
+    from jaxrod.experiments.e4.rod3d import e4_point
     from jaxrod.integrators import SCHEMES, ImplicitLeapfrog
 
     saved = dict(SCHEMES), {c: c.implicit_3d for c in (perturbations.RandomForce, perturbations.RandomVelocity)}

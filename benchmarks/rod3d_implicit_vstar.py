@@ -23,7 +23,7 @@ import jax
 jax.config.update("jax_enable_x64", True)
 
 import jaxrod as jr  # noqa: E402
-from jaxrod.experiments.e3_rod3d import label_3d  # noqa: E402
+from jaxrod.experiments.e3.rod3d import label_3d  # noqa: E402
 from jaxrod.integrators import SCHEMES, ImplicitLeapfrog  # noqa: E402
 
 from _common import write_csv  # noqa: E402

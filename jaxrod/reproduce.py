@@ -38,11 +38,14 @@ def _runners() -> dict:
 
 
 def _runners_3d(n) -> dict:
-    """The parts run with the 3D rod (`model="rod3d"`): `jaxrod.experiments.paper3d`."""
-    from .experiments import paper3d
+    """The parts run with the 3D rod (`model="rod3d"`): each experiment's `rod3d` module."""
+    from .experiments.e3 import rod3d as e3
+    from .experiments.e4 import rod3d as e4
+    from .experiments.e5 import rod3d as e5
+    from .experiments.e6 import rod3d as e6
 
     return {name: (lambda out, quick, progress, f=f: f(out, quick, progress, n=n))
-            for name, f in (("e3", paper3d.e3), ("e4", paper3d.e4), ("e5", paper3d.e5), ("e6", paper3d.e6c))}
+            for name, f in (("e3", e3.e3), ("e4", e4.e4), ("e5", e5.e5), ("e6", e6.e6c))}
 
 
 def reproduce(which, out: str = "results/paper", quick=False, progress: bool = True, model: str = "field",
@@ -52,7 +55,7 @@ def reproduce(which, out: str = "results/paper", quick=False, progress: bool = T
     and `results.json` under `out`; returns the dict written. `quick`: `False` (the full run),
     `True` (coarser, fewer realizations: minutes) or `"tiny"` (the test suite's structure check).
     `model="rod3d"`: E3, E4, E5 and E6 (its part C) with the 3D rod of `n` segments (default
-    500; [`jaxrod.experiments.paper3d`][]), recorded as `e3_rod3d`, ... in `results.json`."""
+    500; [`jaxrod.experiments.paper3d`][], each experiment's `rod3d` module), recorded as `e3_rod3d`, ... in `results.json`."""
     import jax
 
     which = [which] if isinstance(which, str) else list(which)

@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from jaxrod.experiments.e3_rod3d import _bisect
+from jaxrod.experiments.e3.rod3d import _bisect
 
 
 def _counting(root):
@@ -51,7 +51,7 @@ def test_bisect_gives_up_when_every_amplitude_down_to_a_millionth_buckles():
 
 
 def test_runs_file_of_older_columns_is_read_as_verlet_and_migrated(tmp_path):
-    from jaxrod.experiments.e3_rod3d import RUN_COLUMNS, _append, _runs_of
+    from jaxrod.experiments.e3.rod3d import RUN_COLUMNS, _append, _runs_of
 
     path = tmp_path / "runs.csv"
     old = [c for c in RUN_COLUMNS if c != "scheme"]
@@ -68,7 +68,7 @@ def test_runs_file_of_older_columns_is_read_as_verlet_and_migrated(tmp_path):
 
 @pytest.mark.slow
 def test_boundary_3d_replays_its_runs(tmp_path):
-    from jaxrod.experiments.e3_rod3d import boundary_3d
+    from jaxrod.experiments.e3.rod3d import boundary_3d
 
     path = tmp_path / "runs.csv"
     first = boundary_3d([20.0], n=8, rtol=0.1, t1=0.1, runs_csv=str(path), progress=False)
@@ -88,7 +88,7 @@ def test_label_is_the_scene_run_of_the_3d_rod():
     import jax.numpy as jnp
 
     from jaxrod.boundary.indicators import crossing_state
-    from jaxrod.experiments.e3_rod3d import label_3d
+    from jaxrod.experiments.e3.rod3d import label_3d
     from jaxrod.params import RodChannel
     from jaxrod.perturbations import SineVelocity
     from jaxrod.scene import Scene
@@ -121,7 +121,7 @@ def _predicted_against_wide(n, dF):
     """E3's 3D search from the field model's v₀* (±4 %) and plain label bisection of the same
     runs from [1e-4, 1] m/s: two brackets of one monotone label, so both hold the boundary."""
     import jaxrod as jr
-    from jaxrod.experiments.e3_rod3d import boundary_3d
+    from jaxrod.experiments.e3.rod3d import boundary_3d
 
     pred = boundary_3d([dF], n=n, rtol=0.01, t1=0.4, progress=False)["points"][0]
     wide, _ = jr.boundary.critical_velocity(jr.RodChannel.reference(0.3), dF, model="rod3d", n=n, method="bisection",
@@ -137,7 +137,7 @@ def test_predicted_3d_search_brackets_the_boundary_at_60_segments():
     target of ≤ 10 runs to a bracket of 1 %, and plain runs of the scene (`Scene.run`, not the
     search's label) hold its ends: stable at the bracket's low end, buckled at its high end."""
     import jaxrod as jr
-    from jaxrod.experiments.e3_rod3d import boundary_3d
+    from jaxrod.experiments.e3.rod3d import boundary_3d
     from jaxrod.perturbations import SineVelocity
 
     pred = boundary_3d([20.0], n=60, rtol=0.01, t1=0.2, progress=False)["points"][0]

@@ -190,7 +190,7 @@ def test_e4_with_the_3d_rod_takes_a_point_of_a_longer_horizon_and_runs_no_other(
     for the shorter) is reported, on its longest horizon, and not run again; a point recorded only
     on a shorter horizon is run (here `e4_point` raises instead), and so is one whose bracket held no
     boundary, with a wider bracket."""
-    from jaxrod.experiments import paper3d
+    from jaxrod.experiments.e4 import rod3d as paper3d
 
     cols = paper3d.E4_COLUMNS  # the tiny setting: n = 8, μ = 0.3, one realization, horizon 0.05 s
     path = tmp_path / "rod3d_n8.csv"

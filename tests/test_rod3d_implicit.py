@@ -167,7 +167,7 @@ def test_the_critical_velocity_at_60_segments_matches_the_explicit_scheme():
     step (`jaxrod.rod3d.IMPLICIT_DT`, 8× the explicit step here): stable 1 % below the explicit
     scheme's v₀* (26.19 mm/s, bracket 26.13–26.26, results/paper/e3/rod3d_boundary_n60_leapfrog.csv),
     buckled 1 % above."""
-    from jaxrod.experiments.e3_rod3d import label_3d
+    from jaxrod.experiments.e3.rod3d import label_3d
     from jaxrod.rod3d import IMPLICIT_DT
 
     label = label_3d(jr.RodChannel.reference(0.3), 60, IMPLICIT_DT, 0.4, scheme="implicit")
@@ -180,7 +180,7 @@ def test_the_critical_velocity_at_60_segments_matches_the_explicit_scheme():
 def test_the_critical_velocity_at_500_segments_matches_the_explicit_scheme(dF, v_star):
     """The [implicit3d] gate at the paper's 500 segments: within 1 % of the explicit scheme's v₀*
     (27.13 and 8.23 mm/s at ΔF = 5 and 20 N, results/paper/e3/rod3d_boundary_n500.csv)."""
-    from jaxrod.experiments.e3_rod3d import label_3d
+    from jaxrod.experiments.e3.rod3d import label_3d
     from jaxrod.rod3d import IMPLICIT_DT
 
     label = label_3d(jr.RodChannel.reference(0.3), 500, IMPLICIT_DT, 0.4, scheme="implicit")

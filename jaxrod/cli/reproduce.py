@@ -31,7 +31,7 @@ def register(sub) -> None:
     rp.add_argument("--quick", action="store_true", help="coarser, fewer realizations: a few minutes")
     rp.add_argument("--model", choices=["field", "rod3d"], default="field",
                     help="rod3d: E3, E4, E5 and E6C with the 3D rod "
-                         "(jaxrod.experiments.paper3d; hours at 500 segments)")
+                         "(jaxrod.experiments.eN.rod3d; hours at 500 segments)")
     rp.add_argument("--n", type=_positive_int, default=None, help="segments of the 3D rod (default 500; 60 with --quick)")
     rp.add_argument("--quiet", action="store_true")
     rp.set_defaults(func=_cmd_reproduce, all_cores=True)

@@ -1,5 +1,5 @@
 """E3 with the full model: the 3D rod's stable-zone boundary v₀*(ΔF) and its fitted exponent
-(issue [rod3d]), by `jaxrod.experiments.e3_rod3d.boundary_3d`.
+(issue [rod3d]), by `jaxrod.experiments.e3.rod3d.boundary_3d`.
 
 Every finished 3D run is appended to `rod3d_runs.csv` beside this file and replayed from it, so
 the loads can be split between processes (each load's search depends only on its load) and a
@@ -24,8 +24,8 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from jaxrod.experiments.e3_rod3d import boundary_3d  # noqa: E402
-from jaxrod.experiments.paper3d import write_boundary  # noqa: E402
+from jaxrod.experiments.e3.rod3d import boundary_3d  # noqa: E402
+from jaxrod.experiments.e3.rod3d import write_boundary  # noqa: E402
 
 _ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
 HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/

@@ -3,7 +3,7 @@
 realization by label bisection (rtol 1e-2, horizon 0.5 s as E6's field model, bracket a factor 4
 around the field model's ΔF*), then 0.5-s runs at 1.05 ΔF* and at the paper's 40 N, and the
 largest modes of θ at the stop with their shares of the power of the first 40 modes — the E6C
-part of `jaxrod reproduce e6 --model rod3d` (`jaxrod.experiments.paper3d.e6c`), one
+part of `jaxrod reproduce e6 --model rod3d` (`jaxrod.experiments.e6.rod3d.e6c`), one
 `rod3d_random_position_n{n}.csv` per segment count beside this file (commit, date, wall time;
 a point already there is not run again).
 
@@ -21,7 +21,7 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from jaxrod.experiments.paper3d import e6c  # noqa: E402
+from jaxrod.experiments.e6.rod3d import e6c  # noqa: E402
 
 _ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
 HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/

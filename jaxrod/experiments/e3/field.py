@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._settings import _settings
+from .._settings import _settings
 
 __all__ = ['e3']
 
 
 def e3(out, quick, progress):
-    from ..stability_map import stability_map
+    from ...stability_map import stability_map
 
     s = _settings(quick)
     lo, hi, n = s["map_dF"]

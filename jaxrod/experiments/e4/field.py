@@ -8,17 +8,17 @@ import time
 
 import numpy as np
 
-from .. import theory
-from ..output import subplots, write_csv
-from ..params import RodChannel
-from ._settings import _settings
-from ._stats import finite_mean_std
+from ... import theory
+from ...output import subplots, write_csv
+from ...params import RodChannel
+from .._settings import _settings
+from .._stats import finite_mean_std
 
 __all__ = ['e4']
 
 
 def _fit(x, y):
-    from ..stability_map import fit_power_law
+    from ...stability_map import fit_power_law
 
     x, y = np.asarray(x, float), np.asarray(y, float)
     ok = np.isfinite(y) & (y > 0)
@@ -32,8 +32,8 @@ def _frictionless_dF(s, amplitude, perturbation):
     import jax
     import jax.numpy as jnp
 
-    from ..boundary import rod_indicator, safeguarded_newton
-    from ..scene import Scene, make_perturbation
+    from ...boundary import rod_indicator, safeguarded_newton
+    from ...scene import Scene, make_perturbation
 
     rod = RodChannel.reference(mu=0.0)
     n = s["n"] or 128
@@ -53,7 +53,7 @@ def _independent_modes(mus, amplitude, realizations, seed):
     import jax
     import jax.numpy as jnp
 
-    from ..perturbations import GRID, scene_noise_modes
+    from ...perturbations import GRID, scene_noise_modes
 
     out = []
     root = jax.random.key(seed)
@@ -70,8 +70,8 @@ def _independent_modes(mus, amplitude, realizations, seed):
 
 
 def e4(out, quick, progress):
-    from ..boundary import critical_load_curve
-    from ..scene import Scene, default_nodes, make_perturbation
+    from ...boundary import critical_load_curve
+    from ...scene import Scene, default_nodes, make_perturbation
 
     s = _settings(quick)
     mus = s["mus"]

@@ -7,9 +7,9 @@ import os
 
 import numpy as np
 
-from ..output import subplots, write_csv
-from ..params import RodChannel
-from ._settings import _settings
+from ...output import subplots, write_csv
+from ...params import RodChannel
+from .._settings import _settings
 
 __all__ = ['e6']
 
@@ -17,9 +17,9 @@ __all__ = ['e6']
 def e6(out, quick, progress):
     import jax
 
-    from ..boundary import critical_load
-    from ..modal import modal_spectrum
-    from ..scene import Scene, make_perturbation
+    from ...boundary import critical_load
+    from ...modal import modal_spectrum
+    from ...scene import Scene, make_perturbation
 
     s = _settings(quick)
     fig, axes = subplots(1, 3, figsize=(17, 4.5))
@@ -69,7 +69,7 @@ def e6(out, quick, progress):
                       "energy_balance_error": float(sol.energy_balance_error())}
         for mm, a, b in zip(m, p_before, p_after):
             rows.append(dict(case=label, mode=int(mm), power_before=a, power_after=b))
-    from .rod3d import SIZES, crosscheck_critical_velocity, e6_full, rolling_check
+    from ..rod3d import SIZES, crosscheck_critical_velocity, e6_full, rolling_check
 
     res["full_model"] = e6_full(out, quick, progress)
     S = SIZES[quick]

@@ -7,19 +7,19 @@ import os
 
 import numpy as np
 
-from .. import theory
-from ..output import subplots, write_csv
-from ..params import RodChannel
-from ._settings import _settings
-from ._stats import finite_mean_std
-from .convergence import convergence, dominant_modes_at
+from ... import theory
+from ...output import subplots, write_csv
+from ...params import RodChannel
+from .._settings import _settings
+from .._stats import finite_mean_std
+from ..convergence import convergence, dominant_modes_at
 
 __all__ = ['e5']
 
 
 def e5(out, quick, progress):
-    from ..boundary import critical_load_curve
-    from ..scene import Scene, default_nodes, make_perturbation
+    from ...boundary import critical_load_curve
+    from ...scene import Scene, default_nodes, make_perturbation
 
     s = _settings(quick)
     mus = s["mus"]
