@@ -89,25 +89,33 @@ def _simulate_rod3d(args, rod) -> int:
     args.control = args.control or "force"  # the defaults (checked by cli._checks: rod3d only)
     args.speed = 1e-3 if args.speed is None else args.speed
     n = 60 if args.n is None else args.n
-    F = float(theory.reference_load(rod)) + args.dF if args.control != "displacement" else 0.0
-    model = Rod3D(rod, n, control=args.control, speed=args.speed, end_load=F if args.control == "load" else 0.0,
-                  preload=F if args.control == "force" else 0.0)
-    q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
     n_save = min(args.n_save, 1001)
     import jax
 
     from ..integrators import default_for, default_step
-    from ..scene import make_perturbation, scheme_for
+    from ..registry import make_perturbation
+    from ..scene import Scene
 
     pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
-    scheme = scheme_for("rod3d", pert)  # the implicit default under a sine velocity, else explicit
+    F = float(theory.reference_load(rod)) + args.dF if args.control != "displacement" else 0.0
+    if args.control == "load":  # a dead load at the free end: the scene of every model
+        scene = Scene(rod, args.dF, pert, "rod3d", n, args.mode, args.dt)
+        model, scheme = scene.model(), scene.scheme()
+    else:  # held ends after a pre-compression, or a pushed end: the 3D rod's own controls
+        model = Rod3D(rod, n, control=args.control, speed=args.speed, preload=F if args.control == "force" else 0.0)
+        scheme = Rod3D.scheme_under(pert)  # the implicit default under a sine velocity, else explicit
     limit = float(default_for(model, 1.0, scheme).step_limit(model))
     if args.dt is not None and not (0 < args.dt < limit):
         _fail(f"argument --dt: {args.dt!r} s is invalid: the step limit of this rod's scheme is {limit:.4g} s; "
               f"use 0 < dt < {limit:.4g} s.")
-    dt = default_step(model, q0, scheme) if args.dt is None else args.dt
-    if args.perturbation != "sine":
-        q0, v0 = pert.initial_state(model, default_for(model, dt, scheme))
+    if args.control == "load":
+        dt = scene.step()
+        q0, v0 = scene.initial_state()
+    else:
+        q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
+        dt = default_step(model, q0, scheme) if args.dt is None else args.dt
+        if args.perturbation != "sine":
+            q0, v0 = pert.initial_state(model, default_for(model, dt, scheme))
     threshold = float(model.buckle_threshold)  # held ends: half the amplitude that relieves ΔF
     try:
         sol = run(model, q0, v0, args.t1, n_save, dt, threshold=threshold, stop_on_buckle=args.control != "displacement", scheme=scheme,
