@@ -272,7 +272,7 @@ def main(argv=None) -> int:
         if a.seed is None:
             p.error("--held-out needs --seed")
         mutants_heldout.heldout(a.held_out, a.seed, a.out, a.work, a.budget, a.timeout_base, a.resume, a.clear_jit,
-                                a.rev or None)
+                                a.rev or None, jobs=a.jobs)
         write_report(results, a.out)
         return 0
     if a.stale or a.changed:

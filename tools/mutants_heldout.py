@@ -31,6 +31,7 @@ were written against what it showed; a new estimate takes a new seed.
 from __future__ import annotations
 
 import io
+import concurrent.futures
 import json
 import os
 import random
@@ -226,10 +227,12 @@ def _cost(r: dict) -> float:
 
 
 def heldout(n: int, seed: int, out: str, work: str | None, budget: float, base: float, resume: bool,
-            clear_jit: bool, rev: str | None) -> dict:
+            clear_jit: bool, rev: str | None, jobs: int = 1) -> dict:
     """Draw and run the sample (`rev`: the commit copied, None: the working tree), writing
     `out`/heldout.json after each mutant. `resume` goes on in the same work folder, whose copy of
-    jaxrod/ and tests/ is the one the run started on."""
+    jaxrod/ and tests/ is the one the run started on. `jobs` mutants run side by side (each its own
+    pytest process; they are taken in the order drawn, so a stopped run is still a uniform sample
+    up to the `jobs` − 1 last ones in flight)."""
     path = os.path.join(out, "heldout.json")
     old = json.load(open(path)) if os.path.exists(path) else None
     used = (old or {}).get("seeds_used", [])
@@ -270,8 +273,11 @@ def heldout(n: int, seed: int, out: str, work: str | None, budget: float, base: 
     dmap = diffs(work, todo)
     os.makedirs(out, exist_ok=True)
     t0 = time.time()
-    for i, name in enumerate(todo):
-        r = run_one(work, name, stats, failed, budget, base, res.setdefault("controls", {}))
+    controls = res.setdefault("controls", {})
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs))
+    running = [pool.submit(run_one, work, name, stats, failed, budget, base, controls) for name in todo]
+    for i, (name, fut) in enumerate(zip(todo, running)):
+        r = fut.result()
         r["module"], r["diff"] = module_path(name, os.path.join(work, "mutants")), dmap.get(name, "")
         res["mutants"][name] = r
         res["seconds"] = round(res.get("seconds", 0.0) + _cost(r), 1)
