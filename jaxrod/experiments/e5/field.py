@@ -25,7 +25,7 @@ def e5(out, quick, progress):
     mus = s["mus"]
     R = s["realizations"]
     rod0 = RodChannel.reference()
-    n = s["n"] or default_nodes(rod0, s["max_dF"])
+    n = s["n"] or default_nodes(rod0, float(theory.reference_load(rod0)) + s["max_dF"])  # of the load F, not ΔF
     fig, axes = subplots(1, 2, figsize=(12, 4.8))
     res = {"model": "field", "n": n}  # the sine default; each perturbation records its own n
     rows = []
