@@ -14,7 +14,7 @@ from jaxtyping import Array, Float
 from . import theory
 from .integrators import AbstractFixedStep, ProjectedVerlet, default_for
 from .integrators.base import RunOptions
-from .models.dof import DT_FRACTION
+from .models.dof import DT_FRACTION, static_float
 from .models.field import DEFAULT_NODES, FieldModel, default_nodes
 from .models.galerkin import DEFAULT_MODES
 from .params import RodChannel
@@ -23,12 +23,11 @@ from .registry import make_perturbation, model_class, model_names, perturbation_
 from .simulate import simulate
 
 __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1", "make_perturbation",
-           "default_nodes", "scheme_for", "dominant_mode_of"]
+           "default_nodes", "scheme_for"]
 
 # the built-in names (`jaxrod.registry.model_names()` and `perturbation_names()` include any registered since)
 MODELS = model_names()
 PERTURBATIONS = perturbation_names()
-DEFAULT_SEGMENTS = 60  # the 3D rod, as E1 and E6 (docs/rod3d.md)
 DEFAULT_T1 = 2.0  # s, as the reference paper
 
 
@@ -116,7 +115,10 @@ class Scene(eqx.Module):
         """The field model and integrator on which a field perturbation is drawn before it is
         projected onto a model that takes none (the single mode)."""
         grid = FieldModel.from_rod(self.rod, self.n_grid, F=self.F)
-        step = self.grid_dt or DT_FRACTION * 2.0 / _static_omega(grid)
+        step = self.grid_dt or DT_FRACTION * 2.0 / static_float(
+            lambda: jnp.max(grid.max_frequency()),
+            "Scene.dt must be given explicitly when the rod's stiffness parameters are traced (e.g. vmapped over "
+            "EI, rho or R): the step is a static setting.")
         return grid, ProjectedVerlet(step)
 
     def step(self) -> float:
@@ -172,22 +174,6 @@ class Scene(eqx.Module):
         return self.model().dominant_mode(q)
 
 
-def _static_omega(model) -> float:
-    try:
-        with jax.ensure_compile_time_eval():
-            return float(jnp.max(model.max_frequency()))
-    except jax.errors.ConcretizationTypeError:
-        raise ValueError(
-            "Scene.dt must be given explicitly when the rod's stiffness parameters are "
-            "traced (e.g. vmapped over EI, rho or R): the step is a static setting."
-        ) from None
-
-
 def scheme_for(kind: str, perturbation) -> str | None:
     """The scheme of a run of the model registered as `kind` under `perturbation` (`Scene.scheme`)."""
     return model_class(kind).scheme_under(perturbation)
-
-
-def dominant_mode_of(model, q):
-    """The dominant sine mode of a state `q` of `model` (any leading axes): `model.dominant_mode`."""
-    return model.dominant_mode(q)

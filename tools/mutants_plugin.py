@@ -1,6 +1,6 @@
 """A pytest plugin for tools/mutants_heldout.py (loaded with `-p mutants_plugin`, tools/ on PYTHONPATH).
 
-- `JAXROD_MUTANTS_RECORD=PATH`: writes PATH (JSON) at the end of the session: per failing test
+- `JAXROD_MUTANTS_RECORD=PATH`: writes PATH (JSON) at the end of the test run: per failing test
   (in order, the first is the killing one) its node id, the phase (setup, call, teardown, collect), how it failed — "assertion" for an
   AssertionError (a bare assert, pytest.approx, numpy.testing) or pytest's own failure (a
   `pytest.raises` or `pytest.warns` that saw nothing, `pytest.fail`), "exception" for any other
@@ -65,7 +65,7 @@ def pytest_runtest_teardown(item, nextitem):
         sys.modules["jax"].clear_caches()
 
 
-def pytest_sessionfinish(session, exitstatus):
+def pytest_sessionfinish(exitstatus):
     path = os.environ.get("JAXROD_MUTANTS_RECORD")
     if path:
         jaxrod = sys.modules.get("jaxrod")

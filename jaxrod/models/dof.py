@@ -21,13 +21,13 @@ from ..loads import AbstractLoad
 from ..params import RodChannel
 from .base import AbstractModel, friction_work
 
-__all__ = ["AbstractDOFModel", "AbstractRodDOFModel", "DT_FRACTION", "GROWTH_FRACTION"]
+__all__ = ["AbstractDOFModel", "AbstractRodDOFModel", "DT_FRACTION", "GROWTH_FRACTION", "static_float"]
 
 DT_FRACTION = 0.4  # a scene's step: this fraction of the explicit step limit 2/ω_max at ΔF = 0
 GROWTH_FRACTION = 0.25  # ... and at most this fraction of 1/λ_max, the loaded rod's fastest growth
 
 
-def _static(fn, message: str) -> float:
+def static_float(fn, message: str) -> float:
     """`fn()` as a Python float from concrete values, or a `ValueError(message)` when traced."""
     try:
         with jax.ensure_compile_time_eval():
@@ -204,7 +204,7 @@ class AbstractRodDOFModel(AbstractDOFModel):
         λ_max = F/(2√(EIρ)) the fastest growth rate of a loaded rod, so that fast-growing modes
         stay resolved (benchmarks/README.md, field convergence)."""
         unloaded = type(self).for_scene(rod, theory.reference_load(rod), self.size, 1)
-        omega = _static(lambda: jnp.max(unloaded.max_frequency()),
+        omega = static_float(lambda: jnp.max(unloaded.max_frequency()),
                         "Scene.dt must be given explicitly when the rod's stiffness parameters are traced "
                         "(e.g. vmapped over EI, rho or R): the step is a static setting.")
         dt = DT_FRACTION * 2.0 / omega

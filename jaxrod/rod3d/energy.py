@@ -24,6 +24,11 @@ def strains(model, x, Q):
     return c3.pack(sigma), c3.pack(psi) / model.l0
 
 
+def axial_force(model, x, Q):
+    """Compressive axial force of each segment, −EA σ₃ [N]."""
+    return -model.rod.EA * strains(model, x, Q)[0][:, 2]
+
+
 def _strains(model, X, Qr):
     """σ and ψ = log(Qⱼ₊₁Qⱼᵀ) = l̂κ as component tuples, with the pieces the forces reuse."""
     e = tuple(X[k][1:] - X[k][:-1] for k in range(3))

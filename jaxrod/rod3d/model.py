@@ -25,7 +25,7 @@ from ..models.base import AbstractModel
 from ..params import RodChannel
 from ._checks import check_arguments
 from .._numerics import computed_once, float_leaf
-from . import components as c3, energy, hessian, measures
+from . import components as c3, energy, hessian, measures, state
 from .contact import friction_pass, friction_table
 from .state import held_pattern, Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
 from .stiffness import frequency_bound
@@ -172,7 +172,6 @@ class Rod3D(AbstractModel):
 
     # -- discretisation --------------------------------------------------------------------
     n = property(lambda self: self.n_segments)
-
     l0 = property(lambda self: self.rod.L / self.n, doc="Reference segment length l̂ = L/n [m].")
 
     @property
@@ -294,11 +293,7 @@ class Rod3D(AbstractModel):
         """The buckling amplitude [rad] of this control (`jaxrod.rod3d.measures.buckle_threshold`)."""
         return measures.buckle_threshold(self)
 
-    def axial_preload(self) -> Float[Array, ""]:
-        """The straight rod's axial force [N]: `end_load`, `preload` (held ends) or 0 (displacement)."""
-        if self.control == "load":
-            return self.end_load
-        return self.preload if self.control == "force" else jnp.zeros_like(self.preload)
+    axial_preload = state.axial_preload  # the straight rod's axial force [N] (`state.axial_preload`)
 
     def observables(self, q: Rod3DPosition, v: Rod3DVelocity, a: Rod3DForces, t=None) -> dict:
         """What a save records (`jaxrod.rod3d.measures.observables` lists them)."""
@@ -322,23 +317,8 @@ class Rod3D(AbstractModel):
         """ω_max [rad/s] at `q` (default: straight, preloaded): `jaxrod.rod3d.stiffness.frequency_bound`."""
         return frequency_bound(self, q)
 
-    # -- states ------------------------------------------------------------------------------
-    def static_sag(self):
-        """Penetration of a rod resting on the bottom under its own weight [m]."""
-        sag = (self.rod.rho * self.rod.g / self.contact_stiffness) ** (2.0 / 3.0)
-        return sag if self.channel and self.gravity else 0.0 * sag
-
-    def initial_state(self, F: ArrayLike | None = None, lateral_velocity=None,
-                      lateral_offset=None) -> tuple[Rod3DPosition, Rod3DVelocity]:
-        """A straight rod along x on the channel bottom (or on the x axis without a channel),
-        compressed to the uniform axial force `F` [N] (length L(1 − F/EA); default
-        `axial_preload()`), at rest except for an optional lateral (y) velocity [m/s] and
-        lateral offset [m] per node.
-
-        **Returns:** `(q0, v0)`, a [`Rod3DPosition`][] and a [`Rod3DVelocity`][] (every
-        contact at rest starts held by static friction)."""
-        F = self.axial_preload() if F is None else F
-        return straight_state(self, F, lateral_velocity, lateral_offset)
+    static_sag = state.static_sag  # the rod's sink into the wall under its weight [m] (`state.static_sag`)
+    initial_state = straight_state  # (F=None, lateral_velocity=None, lateral_offset=None) -> (q0, v0)
 
     # -- where a perturbation field is given (the AbstractModel interface) -------------------
     def sample_points(self) -> Float[Array, " n1"]:
@@ -354,8 +334,7 @@ class Rod3D(AbstractModel):
         raise TypeError("Rod3D has no coordinates per sample point: a lateral field becomes a state through "
                         "Rod3D.perturbed_state (UserState fields are not available with the 3D rod).")
 
-    def translation(self, q: Rod3DPosition, v: Rod3DVelocity):  # spins are not rates of the directors
-        return q.x, v.v
+    translation = lambda self, q, v: (q.x, v.v)  # positions and velocities: spins are not rates of the directors
 
     def for_tangents(self) -> Rod3D:
         """This rod with a float64 friction pass (float32 tangents overflow at a vanishing slip)."""
@@ -374,15 +353,14 @@ class Rod3D(AbstractModel):
         [m/s] at its nodes (see `initial_state`)."""
         return self.initial_state(None, lateral_velocity=velocity, lateral_offset=offset)
 
-    # -- the rest of the interface ---------------------------------------------------------------
+    # -- the rest of the interface: the fixed-step schemes only (friction is an impulse pass) -------
     def friction_acceleration(self, friction, v, t):
         raise NotImplementedError("Rod3D runs with the fixed-step schemes only (its friction is an impulse pass).")
 
     def linear_flow(self, q, v, t, h):
         raise NotImplementedError("Rod3D has no exact linear flow.")
 
-    def check(self) -> Bool[Array, ""]:
-        return jnp.array(True)  # its arguments are checked when it is made (`_checks.check_arguments`)
+    check = lambda self: jnp.array(True)  # its arguments are checked when it is made (`check_arguments`)
 
     # -- the scene (a dead load F at the free end; `jaxrod.Scene`) -------------------------------
     size_name: ClassVar[str] = "segments"
@@ -390,7 +368,6 @@ class Rod3D(AbstractModel):
     search_method: ClassVar[str] = "bisection"  # the departure rate is opt-in (`boundary.search`)
     sweep_lanes: ClassVar[int] = 1  # a lane per core: its steps are large enough to fill one
     size = property(lambda self: self.n_segments)
-    default_segments: ClassVar[int] = 60  # a scene's, as E1 and E6 (docs/rod3d.md)
 
     @classmethod
     def for_scene(cls, rod, F, size, mode) -> Rod3D:
@@ -398,7 +375,7 @@ class Rod3D(AbstractModel):
 
     @classmethod
     def default_size(cls, rod, F, perturbation) -> int:
-        return cls.default_segments
+        return 60  # a scene's segments, as E1 and E6 (docs/rod3d.md)
 
     @classmethod
     def scheme_under(cls, perturbation) -> str | None:
@@ -410,11 +387,8 @@ class Rod3D(AbstractModel):
         """Positions, velocities, rotations, forces, caches: 20 numbers per node per state row."""
         return 8 * (24 * 20 * (size + 1) + 64) + 4096
 
-    def scene_step(self, rod, F, scheme_step) -> float:
-        return scheme_step(self)
-
-    def initial_state_under(self, perturbation, integrator, grid):
-        return perturbation.initial_state(self, integrator)
+    scene_step = lambda self, rod, F, scheme_step: scheme_step(self)  # its scheme's default step
+    initial_state_under = lambda self, perturbation, integrator, grid: perturbation.initial_state(self, integrator)
 
     def field_of(self, q):
         return jnp.linspace(0.0, self.rod.L, self.n + 1), self.theta(q.x)
@@ -422,10 +396,5 @@ class Rod3D(AbstractModel):
     def dominant_mode(self, q):
         return dominant_mode(wall_angle(q.x)[..., 1:-1])
 
-    def theta(self, x) -> Float[Array, " n1"]:
-        """Angle of each node from the channel bottom [rad] (as θ in the field model)."""
-        return wall_angle(x)
-
-    def axial_force(self, x, Q) -> Float[Array, " n"]:
-        """Compressive axial force of each segment, −EA σ₃ [N]."""
-        return -self.rod.EA * self.strains(x, Q)[0][:, 2]
+    theta = staticmethod(wall_angle)  # (x) -> each node's angle from the channel bottom [rad], θ of the field model
+    axial_force = energy.axial_force  # (x, Q) -> each segment's compressive axial force −EA σ₃ [N]

@@ -12,7 +12,7 @@ from .._numerics import float_leaf, safe_norm
 from .._trig import atan2
 
 
-__all__ = ["held_pattern", "Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "at_rest", "straight_state", "wall_angle", "sine_velocity"]
+__all__ = ["axial_preload", "static_sag", "held_pattern", "Rod3DPosition", "Rod3DVelocity", "Rod3DForces", "at_rest", "straight_state", "wall_angle", "sine_velocity"]
 
 
 class Rod3DPosition(eqx.Module):
@@ -82,11 +82,29 @@ def at_rest(q: Rod3DPosition) -> Rod3DVelocity:
 
 
 @eqx.filter_jit
-def straight_state(model, F: ArrayLike = 0.0, lateral_velocity=None, lateral_offset=None):
-    """The straight initial state of `model` (see `Rod3D.initial_state`), one compiled program
-    (eagerly, its fifty operations each compiled one by one: 1.6 s of a cold CLI run)."""
+def axial_preload(model) -> Float[Array, ""]:
+    """The straight rod's axial force [N]: `end_load`, `preload` (held ends) or 0 (displacement)."""
+    if model.control == "load":
+        return model.end_load
+    return model.preload if model.control == "force" else jnp.zeros_like(model.preload)
+
+
+def static_sag(model):
+    """Penetration of a rod resting on the bottom under its own weight [m]."""
+    sag = (model.rod.rho * model.rod.g / model.contact_stiffness) ** (2.0 / 3.0)
+    return sag if model.channel and model.gravity else 0.0 * sag
+
+
+def straight_state(model, F: ArrayLike | None = None, lateral_velocity=None, lateral_offset=None):
+    """A straight rod along x on the channel bottom (or on the x axis without a channel),
+    compressed to the uniform axial force `F` [N] (length L(1 − F/EA); default
+    `axial_preload()`), at rest except for an optional lateral (y) velocity [m/s] and
+    lateral offset [m] per node: `Rod3D.initial_state`, one compiled program.
+
+    **Returns:** `(q0, v0)`, a [`Rod3DPosition`][] and a [`Rod3DVelocity`][] (every
+    contact at rest starts held by static friction)."""
     n = model.n
-    F = float_leaf(F)
+    F = float_leaf(axial_preload(model) if F is None else F)
     dtype = F.dtype
     l = model.l0 * (1.0 - F / model.rod.EA)
     xs = jnp.arange(n + 1, dtype=dtype) * l

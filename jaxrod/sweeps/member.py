@@ -174,8 +174,8 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
 
 
 def _check_given_step(spec: SweepSpec, scenes) -> None:
-    """A given `spec.dt` must lie below the step limit of the members' scheme where the model's
-    default step is not an explicit limit's fraction (the 3D rod's implicit default)."""
+    """A given `spec.dt` must lie below the step limit of the members' scheme at the sweep's largest
+    load (members at smaller loads are checked again by the engine)."""
     models = [s.model() for s in scenes]
     limit = min(float(default_for(m, 1.0, s.scheme()).step_limit(m)) for m, s in zip(models, scenes))
     if not (0 < spec.dt < limit):

@@ -94,7 +94,7 @@ def e4(out, quick, progress):
         t0 = time.perf_counter()
         # rtol 1e-4: the table gives three digits; n: the scene's default for the perturbation
         # (499 nodes for a random velocity: every mode of the 500-segment noise grid resolved)
-        n_case = s["n"] or Scene(rod, s["max_dF"], make_perturbation(kind, amp), "field").nodes()
+        n_case = s["n"] or Scene(rod, s["max_dF"], make_perturbation(kind, amp), "field").size()
         rr, _ = critical_load_curve(mus, amp, perturbation=kind, realizations=reals, seed=4, n=n_case,
                                     t1=s["t1"], bracket=(1e-3, s["max_dF"]), rtol=1e-4)
         F = np.where(np.asarray(rr.result) == 0, np.asarray(rr.root), np.nan)

@@ -32,7 +32,7 @@ def e5(out, quick, progress):
     for kind, amp in (("random-velocity", 15e-3), ("random-position", 2.0)):
         # the scene's default n for the perturbation (499 for a random velocity: every mode of
         # the 500-segment noise grid resolved), rtol 1e-4 (the dominant mode is read at 1.05 ΔF*)
-        n = s["n"] or Scene(rod0, s["max_dF"], make_perturbation(kind, amp), "field").nodes()
+        n = s["n"] or Scene(rod0, s["max_dF"], make_perturbation(kind, amp), "field").size()
         rr, _ = critical_load_curve(mus, amp, perturbation=kind, realizations=R, seed=5, n=n, t1=s["t1"],
                                     bracket=(1e-3, s["max_dF"]), rtol=1e-4)
         dFs = np.asarray(rr.root) * 1.05  # just past the boundary

@@ -29,7 +29,7 @@ def e6(out, quick, progress):
     pos = make_perturbation("random-position", 2.0, 6, key6)
     # the paper's random-position case at its own load and just past this realization's
     # critical load (where the buckling mode is selected), with the scene's default n
-    n_pos = s["n"] or Scene(rod9, 40.0, pos, "field").nodes()
+    n_pos = s["n"] or Scene(rod9, 40.0, pos, "field").size()
     r, _ = critical_load(rod9, 2.0, perturbation="random-position", key=key6, n=n_pos, t1=s["t1"],
                          bracket=(1e-3, s["max_dF"]), rtol=1e-4, sensitivities=())
     dF_star = float(r.root)
@@ -42,7 +42,7 @@ def e6(out, quick, progress):
     rows = []
     for ax, (label, mu, dF, pert) in zip(axes, cases):
         sc = Scene(RodChannel.reference(mu=mu), dF, pert, "field", s["n"])
-        n = sc.nodes()
+        n = sc.size()
         sol = sc.run(t1=0.5, n_save=501)
         q = np.asarray(sol.q)
         ts = np.asarray(sol.ts)
