@@ -1,0 +1,145 @@
+"""Contracts of the engine that a user reads directly: what a sweep does with each of its inputs,
+the field model's exact linear flow and its energy breakdown, the 3D rod's scheme choice, and the
+one-line errors that name what was wrong."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod.models.dof import AbstractDOFModel
+from jaxrod.modal import sine_basis
+from jaxrod.perturbations import RandomForce, SineVelocity
+from jaxrod.rod3d import Rod3D
+from jaxrod.sweeps import SweepSpec, sweep
+
+ROD = jr.RodChannel.reference(mu=0.3)
+MODE = SweepSpec(model="mode", perturbation="sine", t1=0.3)  # the cheapest sweep to compile
+
+
+def test_sweeping_a_rod_field_gives_what_fixing_it_in_the_spec_gives():
+    """A swept RodChannel field (here R) reaches each member's rod: member i equals the sweep
+    whose spec fixes R at the i-th value."""
+    radii = [0.008, 0.02]
+    swept = sweep(MODE, {"R": radii, "dF": [5.0]}, progress=False)
+    for i, R in enumerate(radii):
+        fixed = sweep(SweepSpec(model="mode", perturbation="sine", t1=0.3, rod={"R": R}), {"dF": [5.0]},
+                      progress=False)
+        for k in ("buckled", "max_theta", "t_stop", "result"):
+            np.testing.assert_allclose(swept.outputs[k][i], fixed.outputs[k][0], rtol=1e-12, err_msg=k)
+    # and the two radii are different rods (the check above would pass on one rod twice)
+    assert swept.outputs["max_theta"][0] != swept.outputs["max_theta"][1]
+
+
+def test_position_perturbation_duration_reaches_the_members():
+    """SweepSpec.duration is how long the random forces act: a longer push moves the rod further."""
+    out = []
+    for duration in (1e-3, 4e-3):
+        spec = SweepSpec(model="mode", perturbation="random-position", amplitude=5.0, duration=duration, t1=0.05)
+        out.append(sweep(spec, {"dF": [5.0], "realization": [0]}, seed=1, progress=False).outputs)
+    assert (out[0]["result"] == jr.RESULTS.successful).all() and (out[1]["result"] == jr.RESULTS.successful).all()
+    assert out[1]["max_theta"][0] > 2.0 * out[0]["max_theta"][0]
+
+
+@pytest.mark.parametrize("name", ["amplitude", "dF"])
+def test_a_member_with_a_non_finite_amplitude_or_load_is_flagged_and_the_rest_run(name):
+    vals = [0.01, float("nan")] if name == "amplitude" else [5.0, float("nan")]
+    res = sweep(MODE, {name: vals}, progress=False)
+    assert res.outputs["result"].tolist() == [jr.RESULTS.successful, jr.RESULTS.invalid_input]
+
+
+def test_sweep_refuses_a_spec_that_is_not_a_sweep_spec_naming_its_type():
+    with pytest.raises(TypeError, match=r"spec must be a SweepSpec, got dict\."):
+        sweep({"model": "mode"}, {"dF": [5.0]}, progress=False)
+
+
+def test_field_linear_flow_is_the_exact_flow_of_each_mode():
+    """θ'' = −k_m θ per sine mode: after h, a_m = a cos ωh + (b/ω) sin ωh, b_m = b cos ωh − aω sin ωh
+    (ω = √k_m, hyperbolic where k_m < 0), checked on a load that makes the first modes unstable."""
+    n = 9
+    m = jr.FieldModel.from_rod(ROD, n, dF=2.0)
+    k = np.asarray(m.modal_stiffness(0.0))
+    assert (k < 0).any() and (k > 0).any()
+    rng = np.random.default_rng(0)
+    a0, b0 = rng.normal(size=n), rng.normal(size=n)
+    S = np.asarray(sine_basis(n))
+    h = 3e-4
+    q, v = m.linear_flow(jnp.asarray(S @ a0), jnp.asarray(S @ b0), 0.0, h)
+    w = np.sqrt(k.astype(complex))
+    a1 = (a0 * np.cos(w * h) + b0 * np.sin(w * h) / w).real
+    b1 = (b0 * np.cos(w * h) - a0 * w * np.sin(w * h)).real
+    np.testing.assert_allclose(np.asarray(q), S @ a1, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(np.asarray(v), S @ b1, rtol=1e-9, atol=1e-12)
+
+
+def test_field_energy_breakdown_names_its_terms_and_gravity_is_half_w_r_theta_squared():
+    """energy_terms: kinetic, bending, gravity, load; a uniform θ has gravity energy
+    ½ w R ∫θ² ds = ½ w R h Σθ² and no kinetic energy at rest."""
+    m = jr.FieldModel.from_rod(ROD, 15, dF=5.0)
+    q = jnp.full(15, 0.1)
+    terms = m.energy_terms(q, jnp.zeros(15), 0.0)
+    assert set(terms) == {"kinetic", "bending", "gravity", "load"}
+    assert float(terms["kinetic"]) == 0.0
+    h = float(ROD.L) / 16
+    assert float(terms["gravity"]) == pytest.approx(0.5 * float(ROD.w) * float(ROD.R) * h * 15 * 0.01, rel=1e-12)
+
+
+def test_3d_rod_runs_leapfrog_under_a_perturbation_not_measured_for_its_implicit_scheme():
+    assert Rod3D.scheme_under(SineVelocity(0.01)) is None  # implicit_3d: its own implicit default
+    assert not RandomForce.implicit_3d
+    assert Rod3D.scheme_under(RandomForce.from_settings(1.0, 6, jax.random.key(0), 1e-3)) == "leapfrog"
+
+
+def test_a_model_without_nodes_is_budgeted_as_one_node():
+    assert AbstractDOFModel.bytes_per_member(None) == AbstractDOFModel.bytes_per_member(1)
+    assert AbstractDOFModel.bytes_per_member(2) > AbstractDOFModel.bytes_per_member(1)
+
+
+def test_galerkin_from_rod_names_the_two_load_arguments_it_needs_one_of():
+    with pytest.raises(ValueError, match=r"^GalerkinModel\.from_rod needs exactly one of F and dF\.$"):
+        jr.GalerkinModel.from_rod(ROD, 4)
+
+
+def test_an_unknown_attribute_of_the_package_is_an_attribute_error_naming_it():
+    with pytest.raises(AttributeError, match=r"^module 'jaxrod' has no attribute 'no_such_thing'$"):
+        jr.no_such_thing  # noqa: B018
+
+
+def test_a_traced_rod_without_a_step_is_refused_naming_scene_dt():
+    def step(E):
+        return jr.Scene(rod=jr.RodChannel.reference(mu=0.3, E=E), dF=5.0, kind="field", n=8).step()
+
+    with pytest.raises(ValueError, match=r"^Scene\.dt must be given explicitly when the rod's stiffness parameters "
+                                         r"are traced \(e\.g\. vmapped over EI, rho or R\): the step is a static setting\."):
+        jax.jit(step)(2e11)
+    assert math.isfinite(step(2e11))
+
+
+def test_critical_load_curve_member_is_the_search_with_its_documented_key():
+    """Point (i, r) of `critical_load_curve` is `critical_load` with key fold_in(key(seed), i·R + r)."""
+    from jaxrod import boundary as bd
+
+    dt = jr.Scene(ROD, 7.0, kind="field", n=12).step()
+    kw = dict(perturbation="random-velocity", model="field", n=12, dt=dt, rtol=1e-4, t1=1.0, bracket=(1e-2, 400.0),
+              sensitivities=())
+    curve, _ = bd.critical_load_curve([0.2, 0.4], 0.1, realizations=2, seed=7, **kw)
+    assert np.asarray(curve.root).shape == (2, 2) and (np.asarray(curve.result) == 0).all()
+    key = jax.random.fold_in(jax.random.key(7), 1 * 2 + 0)
+    one, _ = bd.critical_load(jr.RodChannel.reference(mu=0.4), 0.1, key=key, **kw)
+    assert float(curve.root[1, 0]) == pytest.approx(float(one.root), rel=1e-9)
+    assert float(curve.root[1, 0]) != pytest.approx(float(curve.root[1, 1]), rel=1e-6)  # the keys differ
+
+
+def test_boundary_curve_is_silent_unless_asked_for_progress(capfd):
+    from jaxrod import boundary as bd
+
+    kw = dict(model="field", n=12, dt=jr.Scene(ROD, 7.0, kind="field", n=12).step(), rtol=1e-3, t1=0.5,
+              sensitivities=())
+    bd.boundary_curve(ROD, [3.0, 4.0], **kw)
+    quiet = capfd.readouterr()
+    assert quiet.out == "" and quiet.err == ""
+    bd.boundary_curve(ROD, [3.0, 4.0], progress=True, **kw)
+    assert capfd.readouterr().err != ""
