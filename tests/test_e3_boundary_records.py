@@ -1,0 +1,75 @@
+"""E3's 3D boundary search around a synthetic label (the 3D rod replaced by a known boundary
+v*(ΔF) = c·ΔF^−½, the field model's search by a guess 3 % off it): the brackets, the fitted
+exponent, the runs file and its replay, and what the result records. The real 3D label is
+tested in tests/test_e3_rod3d.py."""
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from jaxrod import boundary
+from jaxrod.experiments.e3 import rod3d as e3
+
+C = 0.1  # v* = C·ΔF^−½ [m/s]
+
+
+def _true(dF):
+    return C / math.sqrt(dF)
+
+
+@pytest.fixture
+def synthetic(monkeypatch):
+    calls = []
+
+    def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=e3.SINK, scheme="implicit"):
+        def buckled(dF, v0):
+            calls.append((float(dF), float(v0)))
+            return 1.0 if float(v0) > _true(float(dF)) else 0.0
+        return buckled
+
+    class Root:
+        def __init__(self, root):
+            self.root = root
+
+    monkeypatch.setattr(e3, "label_3d", label_3d)
+    monkeypatch.setattr(boundary, "critical_velocity", lambda rod, dF, **kw: (Root(1.03 * _true(dF)), None))
+    return calls
+
+
+def test_boundary_3d_brackets_a_known_boundary_and_fits_its_exponent(tmp_path, synthetic):
+    runs = tmp_path / "runs.csv"
+    res = e3.boundary_3d([20.0, 5.0, 80.0], n=8, mu=0.2, rtol=0.01, width=0.04, runs_csv=str(runs), ends="clamped",
+                         dt=1e-5, progress=False)
+    assert [p["dF"] for p in res["points"]] == [5.0, 20.0, 80.0]  # sorted
+    first = synthetic[:2]  # the first bracket: the field's value times 1 ∓ width
+    assert first == [(5.0, pytest.approx(1.03 * _true(5.0) * 0.96, rel=1e-12)),
+                     (5.0, pytest.approx(1.03 * _true(5.0) * 1.04, rel=1e-12))]
+    for p in res["points"]:
+        lo, hi = p["bracket"]
+        assert lo < _true(p["dF"]) < hi and hi / lo - 1 <= 0.01
+        assert p["rod3d"] == pytest.approx(math.sqrt(lo * hi), rel=1e-12)
+        assert p["field"] == pytest.approx(1.03 * _true(p["dF"]), rel=1e-12)
+    assert res["exponent_rod3d"] == pytest.approx(-0.5, abs=0.01)
+    assert res["exponent_field"] == pytest.approx(-0.5, abs=1e-9)
+    assert res["exponent_theory"] == -0.5
+    assert {k: res[k] for k in ("n_segments", "mu", "ends", "friction_at", "rtol", "dt", "t1")} == dict(
+        n_segments=8, mu=0.2, ends="clamped", friction_at="surface", rtol=0.01, dt=1e-5, t1=0.4)
+    rows = list(csv.DictReader(open(runs)))
+    assert len(rows) == len(synthetic) == sum(p["runs"] for p in res["points"])
+    assert {(r["n_segments"], r["mu"], r["ends"], r["scheme"]) for r in rows} == {("8", "0.2", "clamped", "implicit")}
+    assert all(r["buckled"] == str(int(float(r["v0"]) > _true(float(r["dF"])))) for r in rows)
+
+
+def test_boundary_3d_replays_finished_runs_of_the_same_settings_only(tmp_path, synthetic):
+    runs = str(tmp_path / "runs.csv")
+    kw = dict(n=8, rtol=0.02, runs_csv=runs, dt=1e-5, progress=False)
+    first = e3.boundary_3d([10.0], **kw)
+    n_first = len(synthetic)
+    again = e3.boundary_3d([10.0], **kw)
+    assert len(synthetic) == n_first  # every label read back from the file
+    assert again["points"][0]["bracket"] == first["points"][0]["bracket"]
+    e3.boundary_3d([10.0], ends="clamped", **kw)  # other ends: other runs
+    assert len(synthetic) == 2 * n_first
+    assert np.isfinite(first["points"][0]["rod3d"])
