@@ -143,3 +143,17 @@ def test_boundary_curve_is_silent_unless_asked_for_progress(capfd):
     assert quiet.out == "" and quiet.err == ""
     bd.boundary_curve(ROD, [3.0, 4.0], progress=True, **kw)
     assert capfd.readouterr().err != ""
+
+
+def test_critical_load_started_at_its_root_confirms_it_in_fewer_runs():
+    """`start`, a first guess of ΔF* [N], is where the search runs first: started at the root found
+    without it, the search lands on the same root in fewer runs."""
+    from jaxrod import boundary as bd
+
+    kw = dict(model="field", n=12, dt=jr.Scene(ROD, 7.0, kind="field", n=12).step(), rtol=1e-6, t1=1.0,
+              sensitivities=())
+    cold, _ = bd.critical_load(ROD, 0.02, **kw)
+    warm, _ = bd.critical_load(ROD, 0.02, start=float(cold.root) * 1.001, **kw)
+    assert int(cold.result) == 0 and int(warm.result) == 0
+    assert float(warm.root) == pytest.approx(float(cold.root), rel=1e-5)
+    assert int(warm.evaluations) < int(cold.evaluations)
