@@ -90,10 +90,14 @@ def _best(rows):
 
 
 def _modes(theta, n_modes=40):
+    """The two strongest sine modes of `theta` (interior nodes) and their power shares, among the
+    first `n_modes` (at most one per interior node: more would alias)."""
     import jax.numpy as jnp
 
     from ..modal import modal_spectrum
 
+    theta = np.asarray(theta)
+    n_modes = None if n_modes is None else min(n_modes, theta.shape[-1])
     p = np.asarray(modal_spectrum(jnp.asarray(theta), n_modes))
     order = np.argsort(p)[::-1]
     return int(order[0]) + 1, float(p[order[0]]), int(order[1]) + 1, float(p[order[1]])
