@@ -32,7 +32,7 @@ _PERTURBATIONS: dict[str, object] = {
 
 
 def _register(table: dict, what: str, name: str, cls) -> None:
-    if not (isinstance(name, str) and name and name.strip() == name):
+    if not (isinstance(name, str) and name and not any(c.isspace() for c in name)):
         raise ValueError(f"{what} name = {name!r} is invalid: expected a non-empty string without spaces.")
     if not isinstance(cls, type):
         raise TypeError(f"{what} {name!r}: expected a class, got {cls!r}.")

@@ -90,7 +90,7 @@ def _check(name: str, x: ArrayLike, unit: str, *, positive: bool = False,
         if not (finite_ok and sign_ok):
             rule = "> 0" if positive else ">= 0"
             fin = "not NaN" if allow_inf else "finite"
-            raise ValueError(f"{name} = {_fmt(v)} {unit} is invalid: it must be {fin} and {rule}.")
+            raise ValueError(f"{name} = {_fmt(v)}{' ' + unit if unit else ''} is invalid: it must be {fin} and {rule}.")
     return _f(x)
 
 

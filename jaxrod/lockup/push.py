@@ -263,10 +263,10 @@ def inject_lanes(rod: RodChannel, mus, far_loads, speed: float, duration: float,
     speed = _check("speed", speed, 0.0, False, " m/s")
     mus, far_loads = np.broadcast_arrays(np.asarray(mus, float), np.asarray(far_loads, float))
     if mus.ndim != 1 or mus.size == 0:
-        raise ValueError(f"mus = {mus!r} is invalid: expected a non-empty 1D array of friction coefficients.")
+        raise ValueError(f"mus = {mus.tolist()!r} is invalid: expected a non-empty 1D array of friction coefficients.")
     for name, a, closed in (("mus", mus, False), ("far_loads", far_loads, True)):
-        for x in a:
-            _check(name, x, 0.0, closed)
+        for i, x in enumerate(a):
+            _check(f"{name}[{i}]", float(x), 0.0, closed)
     n, q, v, dt = _start(rod, n, imperfection, key, dt_fraction, rod3d, dt, scheme)
     F0, ell = units(rod)
     cap = ell / float(rod.R) if cap is None else _check("cap", cap, 0.0, False)

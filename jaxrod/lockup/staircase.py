@@ -100,10 +100,10 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     mus, far_loads, vary_mu = np.broadcast_arrays(np.asarray(mus, float), np.asarray(far_loads, float),
                                                   np.asarray(vary_mu, bool))
     if mus.ndim != 1 or mus.size == 0:
-        raise ValueError(f"mus = {mus!r} is invalid: expected a non-empty 1D array of friction coefficients.")
+        raise ValueError(f"mus = {mus.tolist()!r} is invalid: expected a non-empty 1D array of friction coefficients.")
     for name, a, closed in (("mus", mus, False), ("far_loads", far_loads, True)):
-        for x in a:
-            _check(name, x, 0.0, closed)
+        for i, x in enumerate(a):
+            _check(f"{name}[{i}]", float(x), 0.0, closed)
     n, q0, v0, dt = _start(rod, n, imperfection, key, 0.3, rod3d, dt, scheme)
     F0, ell = units(rod)
     L, r = float(rod.L), float(rod.R)

@@ -107,7 +107,8 @@ def verdict(push, far, f_in, theta=None, l0: float | None = None, r: float | Non
                            f"first past them at {out['f_unresolved']:.3g} F0")
     edges = push[0] + (push[-1] - push[0]) * np.arange(criterion.windows + 1) / criterion.windows
     if not push[-1] > push[0]:
-        raise ValueError("push does not advance: expected the entry's advance over a loading phase.")
+        raise ValueError(f"push goes from {push[0]:g} to {push[-1]:g} m and does not advance: expected the entry's advance over a "
+                         "loading phase.")
 
     def part(k):
         lo, hi = edges[k], edges[k + 1]

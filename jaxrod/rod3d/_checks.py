@@ -42,4 +42,4 @@ def check_arguments(model) -> None:
         ok = np.all(np.isfinite(v)) and (lo is None or np.all(v >= lo if closed else v > lo))
         if not ok:
             bound = "" if lo is None else f" and {'>=' if closed else '>'} {lo:g}"
-            raise ValueError(f"Rod3D.{name} = {v!r}{' ' + unit if unit else ''} is invalid: it must be finite{bound}.")
+            raise ValueError(f"Rod3D.{name} = {np.asarray(v).tolist()!r}{' ' + unit if unit else ''} is invalid: it must be finite{bound}.")

@@ -147,10 +147,13 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
 
     spec = SweepSpec(**json.loads(spec_json))
 
+    errors = []
+
     def rod_of(row):
         try:
             return RodChannel.reference(mu=spec.mu, **{**dict(spec.rod), **dict(zip(stiff, row))})
-        except ValueError:
+        except ValueError as e:
+            errors.append(str(e))
             return None
 
     if values is not None:
@@ -158,7 +161,7 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
     else:
         rods = [RodChannel.reference(mu=spec.mu, **spec.rod)]
     if not rods:
-        raise ValueError("no member of the sweep has valid rod parameters.")
+        raise ValueError(f"no member of the sweep has valid rod parameters (the first: {errors[0]})")
     cls = model_class(spec.model)
     pert = _perturbation(spec)
     n = spec.n
