@@ -175,6 +175,26 @@ def test_jaxrod_stability_map_column_matches_reference():
     assert all(a == b or near(v) for v, a, b in zip(col["v0"], labels, ref_labels)), (labels, ref_labels)
 
 
+MATCHED = json.loads((ROOT / "results" / "reference" / "rod3d_matched.json").read_text())
+
+
+@pytest.mark.parametrize("row", [r for r in MATCHED["rows"] if r["segments"] == 60], ids=lambda r: f"dF{r['dF']:g}")
+def test_jaxrod_field_at_the_3d_rods_nodes_matches_reference(row):
+    """At the 59 interior nodes of the 60-segment 3D rod (the resolution of the 3D rod's v₀* check,
+    tests/test_rod3d_loaded.py): jaxrod's field model's v₀* against the reference's, within both
+    schemes' Richardson estimates (studies/reference/rod3d_matched.py)."""
+    from jaxrod.boundary import critical_velocity
+
+    RodChannel, Scene, make_perturbation = _jaxrod()
+    rod = RodChannel.reference(mu=MATCHED["mu"])
+    n, dF = row["nodes"], row["dF"]
+    dt = Scene(rod, f64(dF), make_perturbation("sine", 1.0), n=n).step()
+    r, _ = critical_velocity(rod, f64(dF), n=n, dt=dt, rtol=MATCHED["rtol"], sensitivities=())
+    v = float(r.root)
+    assert abs(v - row["reference"]) <= row["tolerance"], (v, row["reference"], row["tolerance"])
+    assert v == pytest.approx(row["field"], rel=2 * MATCHED["rtol"])  # the committed table is this code's
+
+
 # -- the reference reproduces its committed values -----------------------------------------------
 
 @pytest.mark.slow
@@ -191,4 +211,9 @@ def test_reference_reproduces_committed_values():
             assert v == Q[name]["reference"]
         else:
             assert v == pytest.approx(Q[name]["reference"], rel=2 * RTOL)
+    for row in MATCHED["rows"]:
+        if row["segments"] == 60:
+            v = study.critical_velocity(study.Rod(mu=MATCHED["mu"]), row["dF"], row["nodes"], row["reference_dt"],
+                                        t1=MATCHED["t1"], threshold=MATCHED["threshold"], rtol=MATCHED["rtol"])[0]
+            assert v == pytest.approx(row["reference"], rel=2 * MATCHED["rtol"])
 
