@@ -23,7 +23,9 @@ failing tests and how each failed. Per mutant:
 The copy is of a commit (`--rev`, default HEAD: the headline's commit is exactly the code and
 tests run; `--rev ''` copies the working tree and records it as dirty). The mutants run in the
 order drawn, so a run stopped early (Ctrl-C) is itself a uniform sample; `--resume` goes on with
-the same draw in the same work folder (the same copy of jaxrod/ and tests/). A seed is used once
+the same draw in the same work folder (the same copy of jaxrod/ and tests/), or, where that folder
+is gone (another machine), in a new copy of the same commit, mutated and mapped again: the draw
+must come out the same, and the json records the rebuild (`rebuilt`). A seed is used once
 (heldout.json keeps the seeds used and the earlier headlines): the draw is never rerun after tests
 were written against what it showed; a new estimate takes a new seed.
 """
@@ -236,16 +238,23 @@ def heldout(n: int, seed: int, out: str, work: str | None, budget: float, base: 
     path = os.path.join(out, "heldout.json")
     old = json.load(open(path)) if os.path.exists(path) else None
     used = (old or {}).get("seeds_used", [])
+    rebuilt = False
     if resume:
-        if not old or old["seed"] != seed or not os.path.exists(os.path.join(old["work"], "mutants")):
-            raise SystemExit(f"--resume: no unfinished run of seed {seed} with its work folder ({path})")
-        work = old["work"]
+        if not old or old["seed"] != seed:
+            raise SystemExit(f"--resume: no unfinished run of seed {seed} ({path})")
+        if os.path.exists(os.path.join(old["work"], "mutants", "mutmut-stats.json")):
+            work = old["work"]
+        elif old.get("dirty") or old["rev"] == "working tree":
+            raise SystemExit(f"--resume: the run of seed {seed} mutated an uncommitted working tree and its work "
+                             f"folder ({old['work']}) is gone")
+        else:  # another machine, or the folder removed: the same commit is copied, mutated and mapped again
+            rev, clear_jit, rebuilt = old["rev"], old.get("clear_jit", False), True
     elif seed in used:
         raise SystemExit(f"seed {seed} was used already ({path}): a held-out estimate takes a new seed")
     work = os.path.abspath(work or os.path.join(ROOT, "mutants", f"heldout-seed{seed}"))
     rev = _short(rev) if rev else None  # the commit itself: HEAD may move while the run goes on
     if not os.path.exists(os.path.join(work, "mutants", "mutmut-stats.json")):
-        if resume:
+        if resume and not rebuilt:
             raise SystemExit(f"--resume: {work} has no mutmut stats")
         if os.path.exists(work):
             shutil.rmtree(work)
@@ -259,6 +268,8 @@ def heldout(n: int, seed: int, out: str, work: str | None, budget: float, base: 
     sf = os.path.join(work, "stats_failed.txt")
     failed = set(open(sf).read().split()) if os.path.exists(sf) else set()
     drawn = random.Random(seed).sample(names, min(n, len(names)))
+    if resume and drawn != old["drawn"]:
+        raise SystemExit(f"--resume: the mutants of {work} differ from the run's (the draw of seed {seed} changed)")
     mutated = {module_path(x, os.path.join(work, "mutants")) for x in names}
     res = old if resume else {
         "seed": seed, "n": len(drawn), "population": len(names), "rev": rev or "working tree",
@@ -269,6 +280,10 @@ def heldout(n: int, seed: int, out: str, work: str | None, budget: float, base: 
         "module_hashes": {p: sha256(p, work) for p in sorted(mutated)}, "seeds_used": sorted(set(used) | {seed}),
         "history": (old or {}).get("history", []) + ([headline(old)] if old and old.get("mutants") else []),
         "mutants": {}}
+    if rebuilt:  # the rest runs against a new stats run of the same commit (the same mutants, the same draw)
+        res["work"] = work
+        res.setdefault("rebuilt", []).append({"date": time.strftime("%Y-%m-%d"), "prepare_s": round(prep, 1),
+                                              "after": len(res["mutants"])})
     todo = [x for x in drawn if x not in res["mutants"]]
     dmap = diffs(work, todo)
     os.makedirs(out, exist_ok=True)
@@ -333,7 +348,7 @@ def section(h: dict, equivalent: dict) -> list[str]:
         lines += ["No test of the default suite reaches: " + ", ".join(
             f"{k} in `{m}`" for m, k in sorted(none.items(), key=lambda x: -x[1])) + ".", ""]
     if h.get("stats_failed"):
-        lines += [f"Tests left out (they fail on the mutated copy with no mutant active): "
+        lines += ["Tests left out (they fail on the mutated copy with no mutant active): "
                   + ", ".join(f"`{t}`" for t in h["stats_failed"]), ""]
     lines += ["### Exception-only kills in numerical code (for review)", ""]
     for m, r in only.items():
