@@ -324,7 +324,12 @@ def section(h: dict, equivalent: dict) -> list[str]:
     eq = {m: why for m, why in eq.items() if why}
     k, n = len(killed), len(ms)
     secs = [_cost(r) for r in ms.values()]
-    lines = ["## Held-out estimate", "", headline(h), "",
+    unfinished = ([f"**Unfinished:** {n} of the {h['n']} drawn mutants have run (taken in the order drawn, so "
+                   "those run are themselves a uniform sample of the population); `python tools/mutants.py "
+                   f"--held-out {h['n']} --seed {h['seed']} --resume` runs the rest.", ""] if n < h["n"] else [])
+    earlier = ([f"Earlier estimates (each its own seed and commit): {'; '.join(h['history'])}.", ""]
+               if h.get("history") else [])
+    lines = ["## Held-out estimate", "", headline(h), "", *unfinished, *earlier,
              f"A uniform sample of {h['n']} of the {h['population']} mutants of the engine (seed {h['seed']}, drawn "
              f"{h['date']}{', uncommitted changes' if h.get('dirty') else ''}), {n} run; each against the default "
              f"tests mapped to its function, the fastest first within {h['budget_s']:.0f} s of their stats time. "
