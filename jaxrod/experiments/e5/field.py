@@ -26,7 +26,6 @@ def e5(out, quick, progress):
     R = s["realizations"]
     rod0 = RodChannel.reference()
     n = s["n"] or default_nodes(rod0, float(theory.reference_load(rod0)) + s["max_dF"])  # of the load F, not ΔF
-    fig, axes = subplots(1, 2, figsize=(12, 4.8))
     res = {"model": "field", "n": n}  # the sine default; each perturbation records its own n
     rows = []
     for kind, amp in (("random-velocity", 15e-3), ("random-position", 2.0)):
@@ -43,7 +42,6 @@ def e5(out, quick, progress):
         res[kind] = {"n": n, "amplitude": amp, "mu": mus.tolist(), "dominant_mode_mean": mean.tolist(),
                      "dominant_mode_std": std.tolist(), "dominant_mode_min": float(np.nanmin(modes)),
                      "dF_evaluated": finite_mean_std(np.where(ok, dFs, np.nan))[0].tolist()}
-        axes[0].errorbar(mus, mean, yerr=std, fmt="o-", capsize=3, label=f"{kind} (field, ΔF = 1.05 ΔF*)")
         for i, m in enumerate(mus):
             rows.append(dict(perturbation=kind, mu=m, mode_mean=mean[i], mode_std=std[i]))
     # theory: the mode whose zone is crossed first for an equal modal velocity amplitude
@@ -52,16 +50,29 @@ def e5(out, quick, progress):
     m_theory = [int(theory.min_critical_load(rod0.with_friction(m), n_modes, a_modal)[1]) for m in mus]
     res["theory_first_mode_equal_modal_velocity"] = {"mu": mus.tolist(), "mode": m_theory,
                                                      "modal_velocity_rad_s": a_modal}
-    axes[0].plot(mus, m_theory, "k--", label="P7: first zone crossed, equal modal Ȧ₀")
+    _figure(os.path.join(out, "e5_modes.png"), res, rod0)
+    write_csv(os.path.join(out, "e5_modes.csv"), rows)
+    res["convergence"] = convergence(out, quick, progress)  # of ΔF* and of the mode in n, at two μ
+    return res
+
+
+def _figure(path, res, rod):
+    """Left: the dominant mode against μ per perturbation (mean ± std over the realizations) and
+    P7's first zone crossed; right: P6's velocity intercepts of modes 2–10 against the load."""
+    fig, axes = subplots(1, 2, figsize=(12, 4.8))
+    for kind in ("random-velocity", "random-position"):
+        r = res[kind]
+        axes[0].errorbar(r["mu"], r["dominant_mode_mean"], yerr=r["dominant_mode_std"], fmt="o-", capsize=3,
+                         label=f"{kind} (field, ΔF = 1.05 ΔF*)")
+    th = res["theory_first_mode_equal_modal_velocity"]
+    axes[0].plot(th["mu"], th["mode"], "k--", label="P7: first zone crossed, equal modal Ȧ₀")
     axes[0].axhline(6, color="gray", lw=0.8)
     axes[0].set_xscale("log")
     axes[0].set_xlabel("μ")
     axes[0].set_ylabel("dominant buckling mode")
     axes[0].set_title("E5: buckling mode against friction", fontsize=10)
     axes[0].legend(fontsize=7)
-    # P6 intercepts against load for modes 2..10
     F = np.linspace(1.0, 20.0, 300)
-    rod = rod0
     f = float(theory.friction_amplitude(rod))
     for m in (2, 4, 6, 8, 10):
         k = np.asarray(theory.stiffness(rod, m, F))
@@ -73,8 +84,4 @@ def e5(out, quick, progress):
     axes[1].set_title("velocity intercepts of modes 2–10", fontsize=10)
     axes[1].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "e5_modes.png"), dpi=130)
-    write_csv(os.path.join(out, "e5_modes.csv"), rows)
-    res["convergence"] = convergence(out, quick, progress)  # of ΔF* and of the mode in n, at two μ
-    return res
-
+    fig.savefig(path, dpi=130)

@@ -22,7 +22,6 @@ def e6(out, quick, progress):
     from ...scene import Scene, make_perturbation
 
     s = _settings(quick)
-    fig, axes = subplots(1, 3, figsize=(17, 4.5))
     res = {"model": "field"}
     rod9 = RodChannel.reference(mu=0.9)
     key6 = jax.random.key(6)
@@ -39,8 +38,8 @@ def e6(out, quick, progress):
         ("random position, μ = 0.9, ΔF = 40 N", 0.9, 40.0, pos),
         (f"random position, μ = 0.9, ΔF = 1.05 ΔF* = {1.05 * dF_star:.1f} N", 0.9, 1.05 * dF_star, pos),
     ]
-    rows = []
-    for ax, (label, mu, dF, pert) in zip(axes, cases):
+    rows, spectra = [], []
+    for label, mu, dF, pert in cases:
         sc = Scene(RodChannel.reference(mu=mu), dF, pert, "field", s["n"])
         n = sc.size()
         sol = sc.run(t1=0.5, n_save=501)
@@ -53,15 +52,7 @@ def e6(out, quick, progress):
         m = np.arange(1, min(n, 40) + 1)
         p_before = np.asarray(modal_spectrum(q[i_before], len(m)))
         p_after = np.asarray(modal_spectrum(q[i_after], len(m)))
-        ax.bar(m - 0.2, p_before, width=0.4, label=f"before (t = {ts[i_before] * 1e3:.1f} ms)")
-        ax.bar(m + 0.2, p_after, width=0.4, label=f"{'at buckling' if bool(sol.buckled) else 'end'} "
-                                                  f"(t = {ts[i_after] * 1e3:.1f} ms)")
-        ax.set_yscale("log")
-        ax.set_ylim(1e-6, 1.5)
-        ax.set_xlabel("mode m")
-        ax.set_ylabel("normalised modal power")
-        ax.set_title(label, fontsize=9)
-        ax.legend(fontsize=7)
+        spectra.append((label, m, p_before, p_after, ts[i_before], ts[i_after], bool(sol.buckled)))
         res[label] = {"n": n, "dF": dF, "buckled": bool(sol.buckled), "t_buckle": float(sol.t_buckle),
                       "dominant_mode_before": int(np.argmax(p_before)) + 1,
                       "dominant_mode_after": int(np.argmax(p_after)) + 1,
@@ -86,9 +77,24 @@ def e6(out, quick, progress):
         if progress:
             print("  rolling check: a rod the field model calls stuck, friction at the surface and the axis", flush=True)
         res["rolling_check"] = rolling_check(20.0, n=S["n_cross"])
-    fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "e6_spectra.png"), dpi=130)
+    _figure(os.path.join(out, "e6_spectra.png"), spectra)
     write_csv(os.path.join(out, "e6_spectra.csv"), rows)
     return res
 
+
+
+def _figure(path, spectra):
+    """One panel per case: the modal power before the rod moves and at buckling (or at the end)."""
+    fig, axes = subplots(1, len(spectra), figsize=(17, 4.5))
+    for ax, (label, m, p_before, p_after, t_before, t_after, buckled) in zip(np.atleast_1d(axes), spectra):
+        ax.bar(m - 0.2, p_before, width=0.4, label=f"before (t = {t_before * 1e3:.1f} ms)")
+        ax.bar(m + 0.2, p_after, width=0.4, label=f"{'at buckling' if buckled else 'end'} (t = {t_after * 1e3:.1f} ms)")
+        ax.set_yscale("log")
+        ax.set_ylim(1e-6, 1.5)
+        ax.set_xlabel("mode m")
+        ax.set_ylabel("normalised modal power")
+        ax.set_title(label, fontsize=9)
+        ax.legend(fontsize=7)
+    fig.suptitle("E6 (reduced model): modal power before and after buckling", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
