@@ -127,7 +127,8 @@ def e6_full(out, quick=False, progress=True):
     theta = np.asarray(sol.observables["theta"])[:, 1:-1]
     nm = min(40, n - 1)
     p_before = np.asarray(modal_spectrum(theta[1], nm))
-    p_after = np.asarray(modal_spectrum(theta[min(i_b + 10, len(ts) - 1)], nm))
+    i_after = min(i_b + 10, len(ts) - 1)  # 10 saves past 0.1 rad
+    p_after = np.asarray(modal_spectrum(theta[i_after], nm))
     res = {
         "model": "rod3d", "n_segments": n, "case": "μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s, ends held",
         "t_amplitude_0.1rad": float(ts[i_b]) if i_b < len(ts) else None,
@@ -144,29 +145,7 @@ def e6_full(out, quick=False, progress=True):
         "energy_balance_max_J": float(np.max(np.abs(np.asarray(sol.energy_balance)))),
         "dissipated_J": float(sol.dissipated[-1]),
     }
-    fig, axes = subplots(1, 3, figsize=(15, 4.2))
-    axes[0].semilogy(ts * 1e3, E["twist"] / total, label="twist / total")
-    axes[0].semilogy(ts * 1e3, E["shear"] / total, label="shear / total")
-    axes[0].semilogy(ts * 1e3, E["bend"] / total, label="bend / total")
-    axes[0].set_xlabel("t [ms]")
-    axes[0].legend(fontsize=7)
-    axes[0].set_title("energy fractions (μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s)", fontsize=9)
-    axes[1].plot(ts[pre] * 1e3, Nn[pre].min(1), label="min N/w (interior)")
-    axes[1].plot(ts[pre] * 1e3, Nn[pre].max(1), label="max N/w")
-    axes[1].plot(ts[pre] * 1e3, (Fx[pre].max(1) - Fx[pre].min(1)) / F0cr, label="axial force range / F⁰cr")
-    axes[1].set_xlabel("t [ms] (before buckling)")
-    axes[1].legend(fontsize=7)
-    axes[1].set_title("normal and axial force before buckling", fontsize=9)
-    m = np.arange(1, nm + 1)
-    axes[2].bar(m - 0.2, p_before, width=0.4, label=f"t = {ts[1] * 1e3:.1f} ms")
-    axes[2].bar(m + 0.2, p_after, width=0.4, label=f"t = {ts[min(i_b + 10, len(ts) - 1)] * 1e3:.1f} ms")
-    axes[2].set_yscale("log")
-    axes[2].set_ylim(1e-6, 1.5)
-    axes[2].set_xlabel("mode m")
-    axes[2].legend(fontsize=7)
-    axes[2].set_title("modal power of θ, before and after buckling", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "e6_full_model.png"), dpi=130)
+    _figure(os.path.join(out, "e6_full_model.png"), ts, E, pre, Nn, Fx / F0cr, (p_before, p_after, ts[1], ts[i_after]))
     gap = np.asarray(sol.observables["gap"])
     rows = [dict(t=t, **{k: E[k][i] for k in E}, gap=float(gap[i]), amplitude=amp[i]) for i, t in enumerate(ts)]
     write_csv(os.path.join(out, "e6_full_model.csv"), rows)
@@ -277,3 +256,33 @@ def rolling_check(dF=20.0, n=60, mu=0.3, mode=12, amplitude=1e-3, t1=0.1, sweeps
                                             "all_stuck": bool(jnp.all(sol.v_final.stuck[1:-1])),
                                             "friction_residual": float(np.max(sol.observables["friction_residual"]))}
     return res
+
+
+def _figure(path, ts, E, pre, Nn, Fx_over_F0cr, spectra):
+    """E6 in the full model: energy fractions, the normal and axial force before buckling (saves
+    `pre`), and the modal power of θ before and after buckling (`spectra`: the two spectra and
+    their times [s])."""
+    total = sum(E.values())
+    p_before, p_after, t_before, t_after = spectra
+    fig, axes = subplots(1, 3, figsize=(15, 4.2))
+    for k in ("twist", "shear", "bend"):
+        axes[0].semilogy(ts * 1e3, E[k] / total, label=f"{k} / total")
+    axes[0].set_xlabel("t [ms]")
+    axes[0].legend(fontsize=7)
+    axes[0].set_title("energy fractions (μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s)", fontsize=9)
+    axes[1].plot(ts[pre] * 1e3, Nn[pre].min(1), label="min N/w (interior)")
+    axes[1].plot(ts[pre] * 1e3, Nn[pre].max(1), label="max N/w")
+    axes[1].plot(ts[pre] * 1e3, Fx_over_F0cr[pre].max(1) - Fx_over_F0cr[pre].min(1), label="axial force range / F⁰cr")
+    axes[1].set_xlabel("t [ms] (before buckling)")
+    axes[1].legend(fontsize=7)
+    axes[1].set_title("normal and axial force before buckling", fontsize=9)
+    m = np.arange(1, len(p_before) + 1)
+    axes[2].bar(m - 0.2, p_before, width=0.4, label=f"t = {t_before * 1e3:.1f} ms")
+    axes[2].bar(m + 0.2, p_after, width=0.4, label=f"t = {t_after * 1e3:.1f} ms")
+    axes[2].set_yscale("log")
+    axes[2].set_ylim(1e-6, 1.5)
+    axes[2].set_xlabel("mode m")
+    axes[2].legend(fontsize=7)
+    axes[2].set_title("modal power of θ, before and after buckling", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
