@@ -71,7 +71,6 @@ def convergence(out, quick=False, progress=True, max_dF: float = 300.0):
     mus = np.asarray(S["mus"], float)
     R = S["realizations"]
     res, rows = {"model": "field", "realizations": R, "seed": 5, "rtol": 1e-4}, []
-    fig, axes = subplots(1, 2, figsize=(11, 4.2))
     for kind, amp in AMPLITUDES.items():
         per_n = []
         for n in S["n"][kind]:
@@ -97,8 +96,20 @@ def convergence(out, quick=False, progress=True, max_dF: float = 300.0):
                 "dominant_mode_mean": md.tolist(), "dominant_mode": [modes[i].tolist() for _, _, modes in per_n],
                 "last_change_rel": float(dF[-1] / dF[-2] - 1) if len(dF) > 1 else float("nan"),
             }
-            axes[0].plot(ns, dF, "o-", label=f"{kind}, μ = {mu:g}")
-            axes[1].plot(ns, md, "o-", label=f"{kind}, μ = {mu:g}")
+    _figure(os.path.join(out, "convergence.png"), res)
+    write_csv(os.path.join(out, "convergence.csv"), rows)
+    return res
+
+
+def _figure(path, res):
+    """ΔF* (mean over the realizations) and the dominant mode against n, one line per
+    perturbation and μ (the `"kind, mu=…"` entries of `res`)."""
+    fig, axes = subplots(1, 2, figsize=(11, 4.2))
+    for key, r in res.items():
+        if isinstance(r, dict):
+            kind, mu = key.split(", mu=")
+            axes[0].plot(r["n"], r["dF_star_mean"], "o-", label=f"{kind}, μ = {mu}")
+            axes[1].plot(r["n"], r["dominant_mode_mean"], "o-", label=f"{kind}, μ = {mu}")
     axes[0].set_xlabel("field nodes n")
     axes[0].set_ylabel("ΔF* [N] (mean over realizations)")
     axes[0].set_yscale("log")
@@ -108,6 +119,4 @@ def convergence(out, quick=False, progress=True, max_dF: float = 300.0):
         ax.legend(fontsize=7)
     fig.suptitle("random perturbations on the scene's 500-segment grid: convergence in n", fontsize=10)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "convergence.png"), dpi=130)
-    write_csv(os.path.join(out, "convergence.csv"), rows)
-    return res
+    fig.savefig(path, dpi=130)

@@ -1,0 +1,107 @@
+"""The field model's parts of E4 and E6 with their searches (and E6's 3D parts) replaced by
+recorders or exact laws, E6's runs at the test suite's `tiny` setting: the cases each runs, what
+it records and fits, and the files it writes. The 3D parts are tested in
+tests/test_experiments_rod3d_fast.py."""
+
+import csv
+import importlib
+
+import numpy as np
+import pytest
+
+import jaxrod
+from jaxrod.experiments import rod3d as exp3d
+
+e6m = importlib.import_module("jaxrod.experiments.e6.field")
+
+
+class _Root:
+    def __init__(self, root):
+        self.root = root
+
+
+@pytest.fixture
+def e6_tiny(tmp_path, monkeypatch):
+    calls = {}
+
+    def search(rod, amplitude, **kw):
+        calls["search"] = (float(rod.mu_s), amplitude, kw)
+        return _Root(20.0), None
+
+    monkeypatch.setattr(jaxrod.boundary, "critical_load", search)
+    monkeypatch.setattr(exp3d, "e6_full", lambda out, quick, progress: {"full": quick})
+    monkeypatch.setattr(exp3d, "crosscheck_critical_velocity",
+                        lambda dFs, n, progress, friction_at="surface": {"dFs": tuple(dFs), "at": friction_at})
+    monkeypatch.setattr(exp3d, "rolling_check", lambda dF, n: pytest.fail("tiny has no loads to check"))
+    res = e6m.e6(str(tmp_path), "tiny", False)
+    return res, calls, tmp_path
+
+
+def test_e6_runs_the_papers_three_cases_and_records_each_runs_spectra(e6_tiny):
+    res, calls, out = e6_tiny
+    mu, amplitude, kw = calls["search"]
+    assert (mu, amplitude, kw["perturbation"], kw["n"], kw["t1"], kw["rtol"]) == (0.9, 2.0, "random-position", 24, 0.3, 1e-4)
+    assert res["random_position_mu0.9_dF_star"] == 20.0
+    labels = ["sine mode 6, μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s", "random position, μ = 0.9, ΔF = 40 N",
+              "random position, μ = 0.9, ΔF = 1.05 ΔF* = 21.0 N"]
+    assert [k for k in res if k in labels] == labels
+    for label, dF in zip(labels, (5.0, 40.0, 21.0)):
+        r = res[label]
+        assert r["n"] == 24 and r["dF"] == pytest.approx(dF)
+        assert 1 <= r["dominant_mode_before"] <= 24 and 0 < r["dominant_power_after"] <= 1
+    assert res[labels[0]]["dominant_mode_before"] == 6  # the sine velocity is mode 6 alone at first
+    assert res["full_model"] == {"full": "tiny"}
+    assert res["crosscheck_critical_velocity"] == {"dFs": (), "at": "surface"}
+    assert res["crosscheck_critical_velocity_axis_friction"] == {"dFs": (), "at": "axis"}
+    assert "rolling_check" not in res
+    rows = list(csv.DictReader(open(out / "e6_spectra.csv")))
+    assert len(rows) == 3 * 24 and [r["mode"] for r in rows[:3]] == ["1", "2", "3"]
+    for label in labels:
+        mine = [r for r in rows if r["case"] == label]
+        assert np.sum([float(r["power_before"]) for r in mine]) == pytest.approx(1.0, rel=1e-9)
+        assert max(mine, key=lambda r: float(r["power_after"]))["mode"] == str(res[label]["dominant_mode_after"])
+    assert (out / "e6_spectra.png").stat().st_size > 0
+
+
+def test_e4_tabulates_each_case_against_its_law_and_draws_them(tmp_path, monkeypatch):
+    """E4 (field) with its searches replaced by an exact law δF* = 10·μ^e per case (exponent 2 for
+    the sine cases, 1 otherwise): the fitted exponents, the single-mode P7 beside the sine cases,
+    the means and spread over the realizations, the CSV and the figure."""
+    from jaxrod import theory
+    from jaxrod.params import RodChannel
+
+    e4m = importlib.import_module("jaxrod.experiments.e4.field")
+    seen = []
+
+    class Curve:
+        def __init__(self, root):
+            self.root, self.result, self.evaluations = root, np.zeros(root.shape, int), np.full(root.shape, 7)
+
+    def curve(mus, amp, perturbation, realizations, **kw):
+        seen.append((perturbation, amp, realizations, kw["seed"], kw["n"]))
+        e = 2.0 if perturbation == "sine" else 1.0
+        base = 10.0 * np.asarray(mus)[:, None] ** e
+        return Curve(base * (1 + 0.1 * np.arange(realizations))[None, :]), None
+
+    monkeypatch.setattr(jaxrod.boundary, "critical_load_curve", curve)
+    monkeypatch.setattr(e4m, "_frictionless_dF", lambda s, amp, kind: (0.5, 0))
+    monkeypatch.setattr(e4m, "_independent_modes", lambda mus, amp, reals, seed: np.full(len(mus), 3.0))
+    res = e4m.e4(str(tmp_path), "tiny", False)
+    mus = np.array([0.1, 0.4, 1.0])
+    assert [s[0] for s in seen] == ["sine", "sine", "random-velocity", "random-position"]
+    assert [s[2] for s in seen] == [1, 1, 2, 2] and {s[3] for s in seen} == {4} and {s[4] for s in seen} == {24}
+    sine = res["sine 15 mm/s"]
+    assert sine["exponent"] == pytest.approx(2.0, abs=1e-9) and sine["dF_star_std"] == [0.0, 0.0, 0.0]
+    rod = RodChannel.reference()
+    F0 = float(theory.reference_load(rod))
+    p7 = [float(theory.critical_load_velocity(rod.with_friction(m), 6, 15e-3 / rod.R)) - F0 for m in mus]
+    np.testing.assert_allclose(sine["single_mode_P7"], p7, rtol=1e-12)
+    np.testing.assert_allclose(sine["field_over_P7"], 10.0 * mus**2 / np.array(p7), rtol=1e-12)
+    rv = res["random velocity ±15 mm/s"]
+    assert rv["exponent"] == pytest.approx(1.0, abs=1e-9) and rv["independent_modes_P7"] == [3.0, 3.0, 3.0]
+    np.testing.assert_allclose(rv["dF_star"], 10.0 * mus * 1.05, rtol=1e-12)  # the mean of 1.0 and 1.1
+    np.testing.assert_allclose(rv["dF_star_std"], 10.0 * mus * 0.1 / np.sqrt(2), rtol=1e-9)  # ddof 1
+    assert res["random position (forces ±2 N/m for 1 ms)"]["frictionless_dF_star"] == 0.5
+    rows = list(csv.DictReader(open(tmp_path / "e4_critical_load.csv")))
+    assert len(rows) == 4 * 3 and rows[0]["case"] == "sine 7.5 mm/s" and float(rows[0]["mu"]) == 0.1
+    assert (tmp_path / "e4_critical_load.png").stat().st_size > 0
