@@ -105,3 +105,29 @@ def test_e4_tabulates_each_case_against_its_law_and_draws_them(tmp_path, monkeyp
     rows = list(csv.DictReader(open(tmp_path / "e4_critical_load.csv")))
     assert len(rows) == 4 * 3 and rows[0]["case"] == "sine 7.5 mm/s" and float(rows[0]["mu"]) == 0.1
     assert (tmp_path / "e4_critical_load.png").stat().st_size > 0
+
+
+def test_e3_records_the_maps_resolution_exponent_and_frictionless_verdict(tmp_path, monkeypatch):
+    """E3 (field) with the map replaced by a recorder: the grid it asks for (the setting's loads and
+    velocities, μ = 0.3 and 0, mode 6, 2 s) and the entries it takes from the map's summary."""
+    import jaxrod.stability_map as sm
+    from jaxrod.experiments.e3 import field as e3m
+
+    asked = {}
+
+    def stability_map(mus, dFs, v0s, model, n, mode, out, progress, t1):
+        asked.update(mus=mus, dFs=np.asarray(dFs), v0s=np.asarray(v0s), model=model, n=n, mode=mode, out=out, t1=t1)
+        return {"n": 24, "dt": 1e-5, "maps": {
+            "0.3": {"exponent": -0.52, "exponent_stderr": 0.03, "largest_stable_dF_over_F0cr": 12.0},
+            "0": {"buckles_for_every_dF_gt_0": True, "stable": 0}}}
+
+    monkeypatch.setattr(sm, "stability_map", stability_map)
+    res = e3m.e3(str(tmp_path), "tiny", False)
+    assert asked["mus"] == (0.3, 0.0) and asked["model"] == "field" and asked["n"] == 24 and asked["mode"] == 6
+    np.testing.assert_allclose(asked["dFs"], np.geomspace(0.5, 64.0, 4), rtol=1e-12)
+    np.testing.assert_allclose(asked["v0s"], np.geomspace(1e-3, 0.2, 5), rtol=1e-12)
+    assert asked["t1"] == 2.0 and asked["out"] == str(tmp_path)
+    assert res == {"model": "field", "n": 24, "dt": 1e-5, "boundary_exponent": -0.52,
+                   "boundary_exponent_stderr": 0.03, "boundary_exponent_theory": -0.5,
+                   "largest_stable_dF_over_F0cr": 12.0, "frictionless_buckles_for_every_dF_gt_0": True,
+                   "frictionless_stable_points": 0}
