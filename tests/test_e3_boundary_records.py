@@ -73,3 +73,21 @@ def test_boundary_3d_replays_finished_runs_of_the_same_settings_only(tmp_path, s
     e3.boundary_3d([10.0], ends="clamped", **kw)  # other ends: other runs
     assert len(synthetic) == 2 * n_first
     assert np.isfinite(first["points"][0]["rod3d"])
+
+
+def test_write_boundary_writes_the_result_whole_and_one_plain_row_per_load(tmp_path, synthetic):
+    import json
+
+    res = e3.boundary_3d([5.0, 20.0], n=8, rtol=0.01, dt=1e-5, progress=False)
+    stem = str(tmp_path / "b")
+    e3.write_boundary(res, stem)
+    assert json.loads(open(stem + ".json").read()) == json.loads(json.dumps(res))
+    rows = list(csv.DictReader(open(stem + ".csv")))
+    assert [float(r["dF"]) for r in rows] == [5.0, 20.0]
+    for r, p in zip(rows, res["points"]):
+        assert float(r["rod3d_mm_s"]) == pytest.approx(1e3 * p["rod3d"], rel=1e-9)
+        assert float(r["bracket_lo_mm_s"]) == pytest.approx(1e3 * p["bracket"][0], rel=1e-9)
+        assert float(r["bracket_hi_mm_s"]) == pytest.approx(1e3 * p["bracket"][1], rel=1e-9)
+        assert float(r["difference_percent"]) == pytest.approx(100 * (p["rod3d"] / p["field"] - 1), rel=1e-9)
+        assert (r["n_segments"], r["runs"]) == ("8", str(p["runs"]))
+    assert (tmp_path / "b.png").stat().st_size > 0

@@ -3,6 +3,7 @@ the field model's exact linear flow and its energy breakdown, the 3D rod's schem
 one-line errors that name what was wrong."""
 
 import math
+import re
 
 import jax
 import jax.numpy as jnp
@@ -157,3 +158,12 @@ def test_critical_load_started_at_its_root_confirms_it_in_fewer_runs():
     assert int(cold.result) == 0 and int(warm.result) == 0
     assert float(warm.root) == pytest.approx(float(cold.root), rel=1e-5)
     assert int(warm.evaluations) < int(cold.evaluations)
+
+
+def test_a_sweep_refuses_to_resume_into_a_folder_of_another_sweep_saying_why(tmp_path):
+    path = str(tmp_path / "sweep")
+    sweep(MODE, {"dF": [5.0]}, seed=1, path=path, progress=False)
+    with pytest.raises(ValueError, match="^" + re.escape(
+            f"{path!r} holds a different sweep (its spec, inputs, seed or resolution differ); refusing to mix "
+            "results. Use another path or delete it.") + "$"):
+        sweep(MODE, {"dF": [5.0]}, seed=2, path=path, progress=False)
