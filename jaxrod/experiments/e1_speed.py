@@ -74,7 +74,7 @@ def field_ramp_force(rod: RodChannel, speed: float, v0s, n: int = 128, threshold
     rate = float(rod.EA) * speed / float(rod.L)
     t1 = float(F_max / rate)
     model = FieldModel.from_rod(rod, n, F=RampLoad(0.0, F_max, 0.0, t1))
-    dt = 0.4 * 2.0 / float(jnp.max(FieldModel.from_rod(rod, n, F=F_max).max_frequency()))
+    dt = 0.4 * 2.0 / float(model.max_frequency())  # the highest frequency of the ramp: at its smallest load
     t_b, buckled = _ramp_runs(model, jnp.asarray(v0s, float), dt, t1, threshold)
     return np.where(np.asarray(buckled), rate * np.asarray(t_b), np.nan)
 
