@@ -1,0 +1,189 @@
+"""Small contracts of the engine and its drivers that no larger test pins: the energy accounts of
+one Verlet step, the sine shape, the save blocks, the 3D rod's kinetic terms and height, the
+validity of a swept rod, the integrator's options, the experiments' table in `reproduce`, the
+threshold of E1's field ramp, and the lock-up closed forms' name for a bad μ."""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxrod as jr
+
+
+# ------------------------------------------------------------------ one Verlet step's accounts
+
+
+class _Halves:
+    """A stand-in model whose half steps are numbered: each kick adds 1 to v, each friction
+    update doubles it, and each half step's impulse work is (lost, work in) = (v_after, 10·v_after)."""
+
+    def kick(self, q, v, a, h):
+        return v + 1.0
+
+    def friction_update(self, friction, v_trial, v_prev, h, t, q, a):
+        return 2.0 * v_trial
+
+    def impulse_work(self, v_prev, v_trial, v_after, a, h):
+        return {"friction": v_after}, 10.0 * v_after
+
+    def drift(self, q, v, h):
+        return q + h * v
+
+    def accelerations(self, q, v, t):
+        return jnp.zeros(())
+
+
+def test_a_verlet_step_adds_the_losses_and_the_work_of_both_half_steps():
+    q, v, a, (lost, work_in) = jr.ProjectedVerlet(0.1).step(_Halves(), jnp.asarray(0.0), jnp.asarray(0.0),
+                                                           jnp.zeros(()), 0.0, 0.1)
+    # first half: v = 2·(0 + 1) = 2; second half: v = 2·(2 + 1) = 6
+    assert float(v) == 6.0 and float(q) == pytest.approx(0.2)
+    assert float(lost["friction"]) == 8.0 and float(work_in) == 80.0
+
+
+# ------------------------------------------------------------------ modal shapes, save blocks
+
+
+def test_sine_shape_is_the_mode_at_the_interior_nodes():
+    from jaxrod.modal import sine_shape
+
+    got = np.asarray(sine_shape(5, 2))
+    np.testing.assert_allclose(got, np.sin(np.pi * 2 * np.arange(1, 6) / 6), atol=1e-15)
+    assert got.shape == (5,)
+
+
+@pytest.mark.parametrize("intervals", [1, 7, 20, 40, 97, 200, 509, 800, 1024, 4 * 97])
+def test_save_blocks_divide_the_intervals_near_a_twentieth(intervals):
+    """The smallest divisor of the intervals at least ⌈intervals/20⌉, or, when that is more than 4×
+    it (a prime count of intervals), the largest divisor below."""
+    from jaxrod.simulate import BLOCKS, _block_size
+
+    target = -(-intervals // BLOCKS)
+    divisors = [b for b in range(1, intervals + 1) if intervals % b == 0]
+    up = min(b for b in divisors if b >= target)
+    expected = up if up <= 4 * target else max(b for b in divisors if b <= target)
+    assert _block_size(intervals) == expected and intervals % _block_size(intervals) == 0
+
+
+def test_a_prime_count_of_intervals_is_saved_in_blocks_of_one():
+    from jaxrod.simulate import _block_size
+
+    assert _block_size(509) == 1 and _block_size(97) == 1
+
+
+# ------------------------------------------------------------------ the 3D rod's measures
+
+
+@pytest.fixture(scope="module")
+def rod3d_state():
+    model = jr.Rod3D(jr.RodChannel.reference(0.3), 6)
+    q, v = model.initial_state(0.0)
+    return model, q, v
+
+
+def test_rod3d_kinetic_terms_are_the_translational_and_rotational_energies(rod3d_state):
+    model, q, v = rod3d_state
+    vv = jnp.arange(21.0).reshape(7, 3) * 1e-3
+    ww = jnp.arange(18.0).reshape(6, 3) * 1e-2
+    terms = model.kinetic_terms(vv, ww)
+    m, J = np.asarray(model.mass), np.asarray(model.inertia)
+    kin = 0.5 * np.sum(m[:, None] * np.asarray(vv) ** 2)
+    rot = 0.5 * np.sum(J[None, :] * np.asarray(ww) ** 2)
+    assert set(terms) == {"kinetic", "rotational"}
+    assert float(terms["kinetic"]) == pytest.approx(kin, rel=1e-14)
+    assert float(terms["rotational"]) == pytest.approx(rot, rel=1e-14)
+    moving = eqx.tree_at(lambda s: (s.v, s.w), v, (vv, ww))
+    assert float(model.kinetic_energy(moving)) == pytest.approx(kin + rot, rel=1e-14)
+
+
+def test_rod3d_height_is_zero_resting_on_the_bottom_and_the_lift_above_it(rod3d_state):
+    model, q, v = rod3d_state
+    a = model.accelerations(q, v)
+    assert abs(float(model.observables(q, v, a)["height"])) < 1e-12
+    lifted = eqx.tree_at(lambda s: s.x, q, q.x.at[3, 2].add(2e-4))
+    assert float(model.observables(lifted, v, a)["height"]) == pytest.approx(2e-4, rel=1e-9)
+
+
+# ------------------------------------------------------------------ a swept rod's validity
+
+
+@pytest.mark.parametrize("field, value", [("L", -3.0), ("d", 0.0), ("E", jnp.nan), ("g", -9.81)])
+def test_a_rod_with_a_bad_length_or_modulus_is_invalid_whatever_its_poisson_ratio(field, value):
+    from jaxrod.sweeps.member import _valid
+
+    rod = jr.RodChannel.reference(0.3)
+    assert bool(_valid(rod, {}))
+    bad = eqx.tree_at(lambda r: getattr(r, field), rod, jnp.asarray(value))
+    assert not bool(_valid(bad, {}))
+    assert not bool(_valid(bad, {"dF": 5.0, "amplitude": 1e-3}))
+
+
+# ------------------------------------------------------------------ integrators' options
+
+
+def test_default_for_hands_its_options_to_the_integrator():
+    from jaxrod.integrators import default_for
+
+    model = jr.FieldModel.from_rod(jr.RodChannel.reference(0.3), 16, F=5.0)
+    law = jr.Tanh(1e-3)
+    integ = default_for(model, 1e-4, friction=law)
+    assert integ.friction is law and integ.dt == 1e-4
+
+
+# ------------------------------------------------------------------ reproduce's experiments
+
+
+def test_reproduce_runs_each_experiment_by_its_own_name():
+    from jaxrod import reproduce
+    from jaxrod.experiments import e2, e3, e4, e5, e6
+    from jaxrod.experiments.e1 import e1
+    from jaxrod.experiments.helix import post_buckling
+    from jaxrod.experiments.lockup import lockup
+
+    assert reproduce._runners() == {"e1": e1, "e2": e2.e2, "e3": e3.e3, "e4": e4.e4, "e5": e5.e5, "e6": e6.e6,
+                                    "helix": post_buckling, "lockup": lockup}
+
+
+def test_reproduce_with_the_3d_rod_hands_the_folder_and_segments_to_each_part(monkeypatch):
+    from jaxrod import reproduce
+    from jaxrod.experiments.e3 import rod3d as e3r
+    from jaxrod.experiments.e6 import rod3d as e6r
+
+    calls = []
+    monkeypatch.setattr(e3r, "e3", lambda out, quick, progress, n: calls.append(("e3", out, quick, progress, n)))
+    monkeypatch.setattr(e6r, "e6c", lambda out, quick, progress, n: calls.append(("e6", out, quick, progress, n)))
+    runners = reproduce._runners_3d(90)
+    assert set(runners) == {"e3", "e4", "e5", "e6"}
+    runners["e3"]("/tmp/x", True, False)
+    runners["e6"]("/tmp/y", "tiny", True)
+    assert calls == [("e3", "/tmp/x", True, False, 90), ("e6", "/tmp/y", "tiny", True, 90)]
+
+
+# ------------------------------------------------------------------ E1's field ramp
+
+
+def test_field_ramp_force_counts_buckling_at_the_threshold_it_is_given():
+    """Pushed at 1 mm/s after a 30 mm/s kick, the field model (16 nodes, stepped at the ramp's
+    stiffest, unloaded state) passes 0.05 rad before 0.5 rad, both below F_max = 12 N; no run reaches
+    10 rad before F_max."""
+    from jaxrod.experiments.e1_speed import field_ramp_force
+
+    rod = jr.RodChannel.reference(0.0)
+    low, default, high = (field_ramp_force(rod, 1e-3, (30e-3,), n=16, threshold=t) for t in (0.05, 0.5, 2.0))
+    assert 0.0 < low[0] < default[0] < high[0] < 12.0
+
+
+# ------------------------------------------------------------------ lock-up closed forms
+
+
+def test_lockup_length_names_a_negative_friction_coefficient():
+    from jaxrod.lockup.chain import lockup_length
+
+    with pytest.raises(ValueError, match=r"^mu = -0\.2 is invalid: it must be finite and >= 0\.$"):
+        lockup_length(0.019, 5.7e-4, 0.01, -0.2)
+    assert math.isfinite(float(lockup_length(0.019, 5.7e-4, 0.01, 0.2)))
