@@ -652,3 +652,33 @@ def test_e5_averages_the_modes_of_successful_buckled_runs_and_names_the_theory_m
     assert [(r["perturbation"], float(r["mode_mean"])) for r in rows[3:]] == [("random-position", 7.0)] * 2 + [
         ("random-position", 10.0)]
     assert (tmp_path / "e5_modes.png").stat().st_size > 0
+
+
+def test_e5_at_the_default_resolution_takes_each_perturbations_own_node_count(tmp_path, monkeypatch):
+    """Without a node count in the setting (the full run), E5 records the sine default for the
+    largest load F⁰₆ + max ΔF, and searches and runs each perturbation at its scene's own size."""
+    import jaxrod.boundary
+    from jaxrod.experiments._settings import _settings
+    from jaxrod.experiments.e5 import field as mod
+    from jaxrod.models.field import default_nodes
+    from jaxrod.scene import Scene, make_perturbation
+
+    s = dict(_settings("tiny"), n=None)
+    monkeypatch.setattr(mod, "_settings", lambda quick: s)
+    ns = []
+
+    def search(mus_, amp, *, perturbation, realizations, seed, n, t1, bracket, rtol):
+        ns.append((perturbation, n))
+        return SimpleNamespace(root=np.ones((3, 2)), result=np.zeros((3, 2), int)), None
+
+    monkeypatch.setattr(jaxrod.boundary, "critical_load_curve", search)
+    monkeypatch.setattr(mod, "dominant_modes_at", lambda kind, amp, mus_, dFs, n_, R_, seed: (
+        ns.append((kind, n_)) or (np.full((3, 2), 6), np.ones((3, 2), bool))))
+    monkeypatch.setattr(mod, "convergence", lambda *a: {})
+    res = mod.e5(str(tmp_path), "full", False)
+    rod0 = jr.RodChannel.reference()
+    assert res["n"] == default_nodes(rod0, float(theory.reference_load(rod0)) + s["max_dF"])
+    for kind, amp in (("random-velocity", 15e-3), ("random-position", 2.0)):
+        size = Scene(rod0, s["max_dF"], make_perturbation(kind, amp), "field").size()
+        assert res[kind]["n"] == size and ns.count((kind, size)) == 2
+    assert res["random-velocity"]["n"] != res["random-position"]["n"]  # 499 (the noise grid) and the sine default

@@ -187,3 +187,26 @@ def test_lockup_length_names_a_negative_friction_coefficient():
     with pytest.raises(ValueError, match=r"^mu = -0\.2 is invalid: it must be finite and >= 0\.$"):
         lockup_length(0.019, 5.7e-4, 0.01, -0.2)
     assert math.isfinite(float(lockup_length(0.019, 5.7e-4, 0.01, 0.2)))
+
+
+# ------------------------------------------------------------------ progress of a run
+
+
+def test_a_run_reports_each_save_interval_and_whether_it_has_stopped(monkeypatch):
+    """A buckling run (field model, 22 nodes: traced here with the recorder in place) reports
+    save intervals 1..8 of 8, not stopped before it buckles and stopped from then on."""
+    from jaxrod.integrators import progress
+
+    ticks = []
+    monkeypatch.setattr(progress, "tick", lambda done, total, stopped: ticks.append((int(done), int(total),
+                                                                                      bool(stopped))))
+    s = jr.Scene(jr.RodChannel.reference(0.3), 5.0, jr.SineVelocity(0.08, 6.0), "field", n=22)
+    q0, v0 = s.initial_state()
+    sol = jr.simulate(s.model(), s.integrator(), q0, v0, 0.21, n_save=9, throw=False,
+                      options=jr.RunOptions(save_state=False, progress=True))
+    assert bool(sol.buckled) and float(sol.t_buckle) < 0.21
+    assert [t[:2] for t in ticks] == [(i, 8) for i in range(1, 9)]
+    stopped = [t[2] for t in ticks]
+    first = stopped.index(True)
+    assert not any(stopped[:first]) and all(stopped[first:])
+    assert first == int(np.ceil(float(sol.t_buckle) / (0.21 / 8))) - 1
