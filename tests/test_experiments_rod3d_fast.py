@@ -706,3 +706,12 @@ def test_modes_of_a_coarse_rod_are_counted_among_its_own_interior_nodes_only():
     s = np.arange(1, 8) / 8
     m, share, _, _ = p3._modes(np.sin(4 * np.pi * s))
     assert m == 4 and share == pytest.approx(1.0, abs=1e-12)
+
+
+def test_crosscheck_times_the_field_search_and_the_3d_runs_apart(monkeypatch):
+    """Seconds of the field model's search (to 0.01 s) and of the 3D grids after it (to 0.1 s),
+    from a clock that reads 100 s, then 101.23456 s after the search, then 104.56789 s at the end."""
+    clock = iter([100.0, 101.23456, 104.56789])
+    monkeypatch.setattr(exp3d, "time", SimpleNamespace(perf_counter=lambda: next(clock)))
+    (r,), _ = _crosscheck(monkeypatch, lambda v: v > 0.026)
+    assert r["seconds_field"] == 1.23 and r["seconds_rod3d"] == 3.3
