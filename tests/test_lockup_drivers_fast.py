@@ -539,3 +539,18 @@ def test_a_bad_closed_form_argument_is_named_with_its_unit_on_one_line(call, mes
     with pytest.raises(ValueError) as e:
         call()
     assert str(e.value) == message
+
+
+def test_a_soft_helix_under_half_a_newton_has_lubinskis_pitch_and_mitchells_wall_force():
+    """An exact helix of turn rate β = 5 1/m in a rod of EI = 0.01 N·m² under Lubinski's force
+    F = 2EIβ² = 0.5 N, pressing on the wall with Mitchell's r F²/(4EI): both ratios are 1, whatever
+    the size of F."""
+    n, l0, EI, r, beta = 200, 0.05, 0.01, 0.04, 5.0
+    s = np.arange(n + 1) * l0
+    F = 2 * EI * beta**2
+    wall = np.full(n + 1, r * F**2 / (4 * EI))
+    got = helix_against_laws(beta * s, wall, np.full(n, F), l0, EI, 0.8, r, 0.2, 2.0)
+    assert got["inner"].any()
+    assert got["pitch_ratio"] == pytest.approx(1.0, rel=1e-9)
+    assert got["N_ratio"] == pytest.approx(1.0, rel=1e-9)
+    np.testing.assert_allclose(got["pitch_lubinski"], 2 * np.pi / beta, rtol=1e-12)
