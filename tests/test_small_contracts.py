@@ -210,3 +210,15 @@ def test_a_run_reports_each_save_interval_and_whether_it_has_stopped(monkeypatch
     first = stopped.index(True)
     assert not any(stopped[:first]) and all(stopped[first:])
     assert first == int(np.ceil(float(sol.t_buckle) / (0.21 / 8))) - 1
+
+
+def test_the_3d_step_bound_adds_the_wall_stiffness_only_where_gravity_presses_the_rod_on_it():
+    """At rest on the bottom, the Hertz wall adds stiffness through the static sag of gravity:
+    without gravity (or without the channel) the bound is the free rod's, lower than with both."""
+    from jaxrod.rod3d.stiffness import frequency_bound
+
+    rod = jr.RodChannel.reference(0.3)
+    free = float(frequency_bound(jr.Rod3D(rod, 6, gravity=False, channel=False)))
+    assert float(frequency_bound(jr.Rod3D(rod, 6, gravity=False))) == pytest.approx(free, rel=1e-14)
+    assert float(frequency_bound(jr.Rod3D(rod, 6, channel=False))) == pytest.approx(free, rel=1e-14)
+    assert float(frequency_bound(jr.Rod3D(rod, 6))) > free * (1 + 1e-4)
