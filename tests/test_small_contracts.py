@@ -222,3 +222,32 @@ def test_the_3d_step_bound_adds_the_wall_stiffness_only_where_gravity_presses_th
     assert float(frequency_bound(jr.Rod3D(rod, 6, gravity=False))) == pytest.approx(free, rel=1e-14)
     assert float(frequency_bound(jr.Rod3D(rod, 6, channel=False))) == pytest.approx(free, rel=1e-14)
     assert float(frequency_bound(jr.Rod3D(rod, 6))) > free * (1 + 1e-4)
+
+
+def test_a_3d_friction_pass_of_zero_length_keeps_the_stuck_flags_and_the_trial_records(rod3d_state):
+    """At rest on the bottom with a small lateral trial velocity: a pass of h > 0 holds the nodes
+    (static friction) and records its force; a pass of h = 0 changes neither flags nor records."""
+    model, q, v = rod3d_state
+    a = model.accelerations(q, v)
+    moving = eqx.tree_at(lambda s: (s.v, s.stuck, s.force, s.residual, s.sweeps), v,
+                         (v.v.at[1:-1, 1].set(1e-6), jnp.zeros_like(v.stuck), v.force + 7.0,
+                          jnp.asarray(0.25, v.residual.dtype), jnp.asarray(9, v.sweeps.dtype)))
+    law = jr.Coulomb()
+    held = model.friction_update(law, moving, moving, 1e-4, 0.0, q, a)
+    assert bool(jnp.any(held.stuck)) and not bool(jnp.all(held.force == moving.force))
+    same = model.friction_update(law, moving, moving, 0.0, 0.0, q, a)
+    assert not bool(jnp.any(same.stuck))
+    np.testing.assert_array_equal(same.force, moving.force)
+    assert float(same.residual) == 0.25 and int(same.sweeps) == 9
+
+
+def test_a_sweeps_metadata_writes_numpy_scalars_and_paths_as_text(tmp_path):
+    """A user's NumPy seed or a path object in a sweep's metadata is written (as its text), not
+    a TypeError after the members have run."""
+    import json
+    import pathlib
+
+    from jaxrod.sweeps.store import _dump_json
+
+    _dump_json({"seed": np.int64(3), "out": pathlib.Path("a/b"), "mu": 0.3}, tmp_path / "meta.json")
+    assert json.loads((tmp_path / "meta.json").read_text()) == {"seed": "3", "out": "a/b", "mu": 0.3}
