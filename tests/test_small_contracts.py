@@ -251,3 +251,32 @@ def test_a_sweeps_metadata_writes_numpy_scalars_and_paths_as_text(tmp_path):
 
     _dump_json({"seed": np.int64(3), "out": pathlib.Path("a/b"), "mu": 0.3}, tmp_path / "meta.json")
     assert json.loads((tmp_path / "meta.json").read_text()) == {"seed": "3", "out": "a/b", "mu": 0.3}
+
+
+def test_a_run_announces_its_compilation_once_per_model_and_integrator(monkeypatch):
+    """The announcement before a run's first compiled call is keyed by the model's and the
+    integrator's types, the size, the saves and the state's structure: the same field model with
+    another integrator is another program and is announced again."""
+    import importlib
+
+    from jaxrod.integrators import progress
+
+    sim = importlib.import_module("jaxrod.simulate")  # the module (`jaxrod.simulate` is also the function)
+    said = []
+    monkeypatch.setattr(progress, "compiling", lambda what, key: said.append((what, key)))
+
+    class _Stop(Exception):
+        pass
+
+    def start(*a):
+        raise _Stop
+
+    monkeypatch.setattr(sim, "_start", start)
+    s = jr.Scene(jr.RodChannel.reference(0.3), 5.0, jr.SineVelocity(0.08, 6.0), "field", n=16)
+    q0, v0 = s.initial_state()
+    for integ in (jr.ProjectedVerlet(1e-5), jr.ProjectedLeapfrog(1e-5)):
+        with pytest.raises(_Stop):
+            jr.simulate(s.model(), integ, q0, v0, 0.1, n_save=5, options=jr.RunOptions(progress=True))
+    (w1, k1), (w2, k2) = said
+    assert w1 == "FieldModel (16 nodes) with ProjectedVerlet" and w2 == "FieldModel (16 nodes) with ProjectedLeapfrog"
+    assert k1 != k2 and k1[0] is k2[0] and k1[2:] == k2[2:]
