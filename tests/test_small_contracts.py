@@ -280,3 +280,18 @@ def test_a_run_announces_its_compilation_once_per_model_and_integrator(monkeypat
     (w1, k1), (w2, k2) = said
     assert w1 == "FieldModel (16 nodes) with ProjectedVerlet" and w2 == "FieldModel (16 nodes) with ProjectedLeapfrog"
     assert k1 != k2 and k1[0] is k2[0] and k1[2:] == k2[2:]
+
+
+def test_the_3d_rods_viscous_damping_removes_c_m_v2_per_second():
+    """A half step without friction (v_after = v_trial = v_prev = u) of a rod with
+    mass-proportional damping c loses c Σ m |u|² h [J], counted per node and component."""
+    model = jr.Rod3D(jr.RodChannel.reference(0.3), 6, damping=50.0)
+    q, v = model.initial_state(0.0)
+    u = jnp.zeros((7, 3)).at[1:-1, 1].set(2e-3).at[1:-1, 0].set(-1e-3)
+    moving = eqx.tree_at(lambda s: s.v, v, u)
+    a = model.accelerations(q, moving)
+    h = 1e-5
+    lost, work_in = model.impulse_work(moving, moving, moving, a, h)
+    expected = 50.0 * np.asarray(model.mass)[:, None] * np.asarray(u) ** 2 * h
+    np.testing.assert_allclose(np.asarray(lost[0]), expected, rtol=1e-12, atol=1e-30)
+    assert float(jnp.sum(lost[1])) == 0.0 and float(work_in) == 0.0  # no spin; a dead load does no work here
