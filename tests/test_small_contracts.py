@@ -295,3 +295,18 @@ def test_the_3d_rods_viscous_damping_removes_c_m_v2_per_second():
     expected = 50.0 * np.asarray(model.mass)[:, None] * np.asarray(u) ** 2 * h
     np.testing.assert_allclose(np.asarray(lost[0]), expected, rtol=1e-12, atol=1e-30)
     assert float(jnp.sum(lost[1])) == 0.0 and float(work_in) == 0.0  # no spin; a dead load does no work here
+
+
+def test_the_3d_friction_pass_sweeps_until_converged_up_to_its_largest_count():
+    """Nodes sliding every which way on the bottom, held within a step of 1 ms: one sweep leaves
+    a large residual; up to 64 sweeps run until the residual is below `friction_tol` and record
+    how many they took."""
+    out = {}
+    for sweeps in (1, 64):
+        model = jr.Rod3D(jr.RodChannel.reference(0.3), 6, friction_sweeps=sweeps)
+        q, v = model.initial_state(0.0)
+        u = v.v.at[1:-1, 1].set(jnp.array([1e-3, -2e-3, 3e-3, -1e-3, 2e-3])).at[1:-1, 0].set(1e-3)
+        moving = eqx.tree_at(lambda s: (s.v, s.stuck), v, (u, jnp.zeros_like(v.stuck)))
+        out[sweeps] = model.friction_update(jr.Coulomb(), moving, moving, 1e-3, 0.0, q, model.accelerations(q, v))
+    assert int(out[1].sweeps) == 1 and float(out[1].residual) > 0.1
+    assert 1 < int(out[64].sweeps) < 64 and float(out[64].residual) <= float(model.friction_tol)
