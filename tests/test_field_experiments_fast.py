@@ -102,6 +102,8 @@ def test_e4_tabulates_each_case_against_its_law_and_draws_them(tmp_path, monkeyp
     np.testing.assert_allclose(rv["dF_star"], 10.0 * mus * 1.05, rtol=1e-12)  # the mean of 1.0 and 1.1
     np.testing.assert_allclose(rv["dF_star_std"], 10.0 * mus * 0.1 / np.sqrt(2), rtol=1e-9)  # ddof 1
     assert res["random position (forces ±2 N/m for 1 ms)"]["frictionless_dF_star"] == 0.5
+    # every search's evaluations are counted: 7 per realization and μ
+    assert [res[k]["evaluations_total"] for k in ("sine 15 mm/s", "random velocity ±15 mm/s")] == [7 * 3, 7 * 3 * 2]
     rows = list(csv.DictReader(open(tmp_path / "e4_critical_load.csv")))
     assert len(rows) == 4 * 3 and rows[0]["case"] == "sine 7.5 mm/s" and float(rows[0]["mu"]) == 0.1
     assert (tmp_path / "e4_critical_load.png").stat().st_size > 0
@@ -131,3 +133,26 @@ def test_e3_records_the_maps_resolution_exponent_and_frictionless_verdict(tmp_pa
                    "boundary_exponent_stderr": 0.03, "boundary_exponent_theory": -0.5,
                    "largest_stable_dF_over_F0cr": 12.0, "frictionless_buckles_for_every_dF_gt_0": True,
                    "frictionless_stable_points": 0}
+
+
+def test_e4s_independent_modes_bound_uses_each_realizations_own_noise():
+    """The random velocity's critical load if each mode buckled alone from its own modal velocity:
+    realization r at the i-th μ draws its noise from the key the searches use for it,
+    fold_in(key(seed), i·realizations + r), and the bound is P7's least ΔF over modes 1..499,
+    averaged over the realizations."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxrod import theory
+    from jaxrod.params import RodChannel
+    from jaxrod.perturbations import GRID, scene_noise_modes
+
+    e4m = importlib.import_module("jaxrod.experiments.e4.field")
+    got = e4m._independent_modes(np.array([0.2, 0.5]), 15e-3, 2, seed=4)
+    rod = RodChannel.reference(mu=0.5)
+    m = jnp.arange(1, GRID)
+    per = [float(jnp.min(theory.critical_load_velocity(
+        rod, m, jnp.abs(scene_noise_modes(jax.random.fold_in(jax.random.key(4), 2 + r), 15e-3)) / rod.R)))
+        - float(theory.reference_load(rod)) for r in range(2)]
+    assert got.shape == (2,) and got[1] == pytest.approx(np.mean(per), rel=1e-12)
+    assert per[0] != per[1] and got[0] != got[1]
