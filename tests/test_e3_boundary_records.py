@@ -91,3 +91,30 @@ def test_write_boundary_writes_the_result_whole_and_one_plain_row_per_load(tmp_p
         assert float(r["difference_percent"]) == pytest.approx(100 * (p["rod3d"] / p["field"] - 1), rel=1e-9)
         assert (r["n_segments"], r["runs"]) == ("8", str(p["runs"]))
     assert (tmp_path / "b.png").stat().st_size > 0
+
+
+def test_e3_searches_the_settings_loads_and_writes_the_boundary_under_its_scheme(tmp_path, monkeypatch):
+    """`e3` (3D part) at an explicit segment count: the boundary search gets the setting's loads,
+    tolerance and horizon and the runs file under `out`; the boundary is written under a name
+    holding n and the scheme; the summary reports the exponents beside the paper's and counts
+    the runs and the bracketed points."""
+    from jaxrod.experiments._paper3d import SIZES
+
+    seen = {}
+    res = dict(scheme="implicit", exponent_rod3d=-0.48, exponent_rod3d_stderr=0.02, exponent_field=-0.51,
+               exponent_field_stderr=0.01, points=[dict(runs=5, bracket=[0.1, 0.11]), dict(runs=7, bracket=None)])
+
+    def boundary_3d(loads, **kw):
+        seen["search"] = (list(loads), kw)
+        return res
+
+    monkeypatch.setattr(e3, "boundary_3d", boundary_3d)
+    monkeypatch.setattr(e3, "write_boundary", lambda r, stem: seen.update(written=(r, stem)))
+    got = e3.e3(str(tmp_path), "tiny", False, n=9)
+    S = SIZES["tiny"]
+    assert seen["search"] == (list(S["loads"]), dict(n=9, rtol=S["rtol"], t1=S["t1_e3"],
+                                                     runs_csv=str(tmp_path / "rod3d_runs.csv"), progress=False))
+    assert seen["written"] == (res, str(tmp_path / "rod3d_boundary_n9_implicit"))
+    assert got == dict(n=9, loads=list(S["loads"]), exponent_rod3d=-0.48, exponent_rod3d_stderr=0.02,
+                       exponent_field=-0.51, exponent_field_stderr=0.01, exponent_paper=e3.PAPER_E3_EXPONENT,
+                       runs=[5, 7], converged=1)
