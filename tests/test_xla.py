@@ -42,3 +42,11 @@ def _probe(**env):
 @pytest.mark.parametrize("env, expected", [({}, "True"), ({"JAXROD_XLA_DEFAULTS": "0"}, "False")])
 def test_a_fresh_process_compiles_loops_as_one_function(env, expected):
     assert _probe(**env) == expected
+
+
+def test_this_process_compiles_loops_as_its_xla_flags_say():
+    """In the test process itself (jaxrod imported before its first computation, as in a
+    user's script): the probe finds loops compiled as one function exactly when the option is in
+    `XLA_FLAGS`."""
+    wanted = f"xla_cpu_small_while_loop_byte_threshold={_xla.SMALL_LOOP_BYTES}" in os.environ.get("XLA_FLAGS", "")
+    assert _xla.in_effect() is wanted
