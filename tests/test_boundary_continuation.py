@@ -78,3 +78,17 @@ def test_prediction_extrapolates_the_ratio_to_the_reference_linearly_in_log_x():
     # ratio 2 at x = 1 and 4 at x = 10: log ratio rises by log 2 per decade
     assert _predict([1.0, 10.0], [2.0, 40.0], ref, 100.0) == pytest.approx(100.0 * 8.0)
     assert _predict([5.0, 5.0], [10.0, 20.0], ref, 7.0) == pytest.approx(7.0 * 4.0)  # same x twice: the last ratio
+
+
+def test_root_continuation_seeds_each_bracket_with_the_last_root_and_falls_back_to_the_full_one():
+    """Roots of g_ε(x) = x − r(ε) for r = 1.5, 1.1, 5.0: the second lies in [1.5/1.5, 1.5·1.5] (the
+    seeded bracket), the third does not and is found in the full bracket [0.1, 10]."""
+    from jaxrod.boundary.roots import continuation
+
+    r = {0.5: 1.5, 0.1: 1.1, 0.01: 5.0}
+    out = continuation(lambda x, eps: x - r[eps], [0.5, 0.1, 0.01], 0.1, 10.0, rtol=1e-12)
+    assert [int(o.result) for o in out] == [int(ROOT_RESULTS.converged)] * 3
+    np.testing.assert_allclose([float(o.root) for o in out], [1.5, 1.1, 5.0], rtol=1e-10)
+    # a seeded bracket only 1 % wide around 1.1 misses 5.0 as well: found in the full bracket
+    stuck = continuation(lambda x, eps: x - r[eps], [0.1, 0.01], 0.1, 10.0, rtol=1e-12, widen=1.01)
+    assert float(stuck[1].root) == pytest.approx(5.0, rel=1e-10)
