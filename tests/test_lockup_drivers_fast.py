@@ -554,3 +554,20 @@ def test_a_soft_helix_under_half_a_newton_has_lubinskis_pitch_and_mitchells_wall
     assert got["pitch_ratio"] == pytest.approx(1.0, rel=1e-9)
     assert got["N_ratio"] == pytest.approx(1.0, rel=1e-9)
     np.testing.assert_allclose(got["pitch_lubinski"], 2 * np.pi / beta, rtol=1e-12)
+
+
+def test_a_lane_of_a_batched_record_keeps_the_shared_entries_and_takes_its_own_rows():
+    """`lane(rec, k)`: the times, phases, units, resolution and scheme are shared by every lane;
+    every other entry is the lane's row k."""
+    from jaxrod.lockup.push import lane
+
+    shared = dict(t=np.linspace(0, 1, 4), phase=np.zeros(4, int), ts=np.arange(3.0), F0=2.0, ell=1.5, r=0.01, n=10,
+                  dt=1e-4, scheme="implicit")
+    own = dict(f_in=np.arange(8.0).reshape(2, 4), push=-np.arange(8.0).reshape(2, 4), u=np.ones((2, 4, 11)) * [[[1]], [[2]]])
+    got = lane({**shared, **own}, 1)
+    assert set(got) == set(shared) | set(own)
+    for k, v in shared.items():
+        assert got[k] is v
+    np.testing.assert_array_equal(got["f_in"], [4.0, 5.0, 6.0, 7.0])
+    np.testing.assert_array_equal(got["push"], [-4.0, -5.0, -6.0, -7.0])
+    assert got["u"].shape == (4, 11) and np.all(got["u"] == 2)
