@@ -151,7 +151,7 @@ class SingleMode(AbstractDOFModel):
         """θ = A sin(mπs/L) on 129 points (any leading axes of `q`)."""
         s = jnp.linspace(0.0, self.rod.L, 129)
         shape = jnp.sin(self.mode * jnp.pi * s / self.rod.L)
-        return s, jnp.asarray(q)[..., None] * shape
+        return s, jnp.tensordot(jnp.asarray(q), shape, axes=0)  # the outer product, without rank promotion
 
     def dominant_mode(self, q):
         return jnp.full(jnp.shape(q), self.mode)
