@@ -310,3 +310,38 @@ def test_the_3d_friction_pass_sweeps_until_converged_up_to_its_largest_count():
         out[sweeps] = model.friction_update(jr.Coulomb(), moving, moving, 1e-3, 0.0, q, model.accelerations(q, v))
     assert int(out[1].sweeps) == 1 and float(out[1].residual) > 0.1
     assert 1 < int(out[64].sweeps) < 64 and float(out[64].residual) <= float(model.friction_tol)
+
+
+# ------------------------------------------------------------------ θ(s) of every model's state
+
+
+@pytest.mark.parametrize("kind, size", [("mode", None), ("galerkin", 12), ("field", 23)])
+def test_every_reduced_model_draws_its_state_as_theta_of_s(kind, size):
+    """`field_of(q)` is (s, θ(s)): for the mode-6 state of amplitude A = 0.02 rad (one modal
+    amplitude, or the nodes' values of A sin(6πs/L)), θ = A sin(6πs/L) at every point it returns
+    (inside [0, L]), for a batch of states too."""
+    rod = jr.RodChannel.reference(0.3)
+    model = jr.Scene(rod, 5.0, jr.SineVelocity(0.01, 6.0), kind, n=size).model()
+    L, A = float(rod.L), 0.02
+    if kind == "mode":
+        q = jnp.asarray(A)
+    elif kind == "galerkin":
+        q = jnp.zeros(size).at[5].set(A)
+    else:
+        q = A * jnp.sin(6 * jnp.pi * jnp.arange(1.0, size + 1) / (size + 1))
+    s, th = (np.asarray(a) for a in model.field_of(q))
+    assert s.ndim == 1 and th.shape == s.shape and s.size >= size if size else s.size > 100
+    assert 0.0 <= s.min() and s.max() <= L and np.all(np.diff(s) > 0)
+    np.testing.assert_allclose(th, A * np.sin(6 * np.pi * s / L), atol=1e-12)
+    _, both = model.field_of(jnp.stack([q, 2 * q]))
+    np.testing.assert_allclose(np.asarray(both), [th, 2 * th], atol=1e-12)
+
+
+def test_the_3d_rod_draws_its_state_as_its_nodes_wall_angles(rod3d_state):
+    model, q, v = rod3d_state
+    off = 0.5 * float(model.rod.R) * jnp.sin(jnp.pi * jnp.arange(7.0) / 6)
+    q2, _ = model.initial_state(0.0, lateral_offset=off)
+    s, th = model.field_of(q2)
+    np.testing.assert_allclose(np.asarray(s), np.linspace(0.0, float(model.rod.L), 7), atol=1e-15)
+    np.testing.assert_array_equal(np.asarray(th), np.asarray(model.theta(q2.x)))
+    assert float(jnp.max(jnp.abs(th))) > 0.1
