@@ -167,3 +167,31 @@ def test_a_sweep_refuses_to_resume_into_a_folder_of_another_sweep_saying_why(tmp
             f"{path!r} holds a different sweep (its spec, inputs, seed or resolution differ); refusing to mix "
             "results. Use another path or delete it.") + "$"):
         sweep(MODE, {"dF": [5.0]}, seed=2, path=path, progress=False)
+
+
+def test_galerkin_linear_flow_is_the_exact_flow_of_each_mode():
+    """The Galerkin model's coordinates are the modal amplitudes: after h, a_m = a cos ωh + (b/ω)
+    sin ωh, b_m = b cos ωh − aω sin ωh with ω = √k_m of its own modal stiffness (hyperbolic where
+    k_m < 0, the unstable modes at ΔF = 2 N)."""
+    m = jr.Scene(ROD, 2.0, jr.SineVelocity(0.01, 6.0), "galerkin", n=10).model()
+    k = np.asarray(m.modal_stiffness(0.0))
+    assert (k < 0).any() and (k > 0).any()
+    rng = np.random.default_rng(1)
+    a0, b0 = rng.normal(size=10), rng.normal(size=10)
+    h = 3e-4
+    q, v = m.linear_flow(jnp.asarray(a0), jnp.asarray(b0), 0.0, h)
+    w = np.sqrt(k.astype(complex))
+    np.testing.assert_allclose(np.asarray(q), (a0 * np.cos(w * h) + b0 * np.sin(w * h) / w).real, rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(v), (b0 * np.cos(w * h) - a0 * w * np.sin(w * h)).real, rtol=1e-9)
+
+
+def test_galerkin_friction_acceleration_is_the_projected_sliding_friction():
+    """Sliding everywhere in one direction (a positive mode-1 velocity), the friction law gives
+    f_d = μ_d N/(ρR) along the velocity at every quadrature point (the ODE subtracts it); projected on
+    the modes, mode m gets f_d ∫ sin(mπs/L) over ∫ sin²: 4 f_d/(mπ) for odd m, 0 for even m."""
+    m = jr.Scene(ROD, 2.0, jr.SineVelocity(0.01, 6.0), "galerkin", n=6).model()
+    _, f_d = m.friction_bounds(0.0)
+    f_d = float(np.max(np.asarray(f_d)))
+    got = np.asarray(m.friction_acceleration(jr.Coulomb(), jnp.zeros(6).at[0].set(1.0), 0.0))
+    want = [4 * f_d / (mm * np.pi) if mm % 2 else 0.0 for mm in range(1, 7)]
+    np.testing.assert_allclose(got, want, rtol=2e-3, atol=2e-3 * f_d)
