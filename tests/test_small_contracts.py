@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -345,3 +346,92 @@ def test_the_3d_rod_draws_its_state_as_its_nodes_wall_angles(rod3d_state):
     np.testing.assert_allclose(np.asarray(s), np.linspace(0.0, float(model.rod.L), 7), atol=1e-15)
     np.testing.assert_array_equal(np.asarray(th), np.asarray(model.theta(q2.x)))
     assert float(jnp.max(jnp.abs(th))) > 0.1
+
+
+# ------------------------------------------------------------------ small pieces of the models
+
+
+def test_the_field_models_frictionless_loads_are_p5_with_the_discrete_wavenumbers():
+    """F⁰_m = EI κ_m² + w/(R κ_m²) with κ_m² = (4/h²) sin²(mπ/(2(n+1))), h = L/(n+1): the continuous
+    F⁰_m = EI (mπ/L)² + w L²/(R m²π²) as the nodes refine (second order in h)."""
+    from jaxrod import theory
+
+    rod = jr.RodChannel.reference(0.3)
+    EI, w, R, L = (float(x) for x in (rod.EI, rod.w, rod.R, rod.L))
+    errs = []
+    for n in (31, 63):
+        got = np.asarray(jr.FieldModel.from_rod(rod, n, F=5.0).frictionless_loads())
+        h = L / (n + 1)
+        k2 = 4 / h**2 * np.sin(np.arange(1, n + 1) * np.pi / (2 * (n + 1))) ** 2
+        np.testing.assert_allclose(got, EI * k2 + w / (R * k2), rtol=1e-13)
+        errs.append(got[5] / float(theory.frictionless_load(rod, 6)) - 1)
+    assert abs(errs[1]) < abs(errs[0]) / 3.5 and abs(errs[1]) < 2e-3
+
+
+def test_a_lateral_force_adds_its_acceleration_and_two_add_up():
+    """`under_lateral_force(f)` adds f/(ρR) to every node's angular acceleration; a second force adds
+    to the first; the tangent model keeps them."""
+    rod = jr.RodChannel.reference(0.3)
+    m = jr.FieldModel.from_rod(rod, 9, F=5.0)
+    q, v = 0.01 * jnp.sin(jnp.arange(1.0, 10.0)), jnp.zeros(9)
+    base = np.asarray(m.accelerations(q, v, 0.0))
+    f, g = jnp.full(9, 0.2), jnp.linspace(-0.1, 0.1, 9)
+    rhoR = float(rod.rho * rod.R)
+    one = m.under_lateral_force(f)
+    two = one.under_lateral_force(g)
+    np.testing.assert_allclose(np.asarray(one.accelerations(q, v, 0.0)), base + 0.2 / rhoR, rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(two.accelerations(q, v, 0.0)), base + np.asarray(f + g) / rhoR, rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(two.acceleration(q, 0.0)), np.asarray(m.acceleration(q, 0.0)) + np.asarray(f + g) / rhoR,
+                               rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(two.for_tangents().accelerations(q, v, 0.0)),
+                               np.asarray(two.accelerations(q, v, 0.0)), rtol=0)
+    assert two.rod is m.rod
+
+
+def test_the_3d_rods_tangent_model_runs_its_friction_pass_in_float64_and_is_otherwise_the_same(rod3d_state):
+    model, _, _ = rod3d_state
+    t = model.for_tangents()
+    assert t.friction_precision == "float64" and model.friction_precision != "float64"
+    for a, b in zip(jax.tree_util.tree_leaves(model), jax.tree_util.tree_leaves(t)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_the_scheme_of_a_scene_is_its_models_choice_under_the_perturbation():
+    from jaxrod.rod3d import Rod3D
+    from jaxrod.scene import scheme_for
+
+    sine = jr.SineVelocity(0.01, 6.0)
+    assert scheme_for("rod3d", sine) == Rod3D.scheme_under(sine)
+    assert scheme_for("field", sine) is None and scheme_for("mode", sine) is None
+    noise = jr.RandomVelocity(0.015, jax.random.key(0))
+    assert scheme_for("rod3d", noise) == Rod3D.scheme_under(noise)
+
+
+@pytest.mark.parametrize("module", ["jaxrod", "jaxrod.integrators"])
+def test_the_smooth_integrator_is_imported_on_first_use_and_other_names_are_refused(module):
+    import importlib
+
+    from jaxrod.integrators.smooth import DiffraxSmooth
+
+    mod = importlib.import_module(module)
+    assert mod.DiffraxSmooth is DiffraxSmooth
+    with pytest.raises(AttributeError, match=rf"^module '{module}' has no attribute 'Nope'$"):
+        getattr(mod, "Nope")
+
+
+def test_the_default_step_is_the_schemes_own():
+    """An explicit scheme's default step is half its stability limit; asking another scheme by
+    name gives that scheme's."""
+    from jaxrod.integrators import default_step
+
+    m = jr.FieldModel.from_rod(jr.RodChannel.reference(0.3), 15, F=5.0)
+    limit = 2.0 / float(m.max_frequency())
+    assert default_step(m) == pytest.approx(0.5 * limit, rel=1e-12)
+    assert default_step(m, scheme="leapfrog") == pytest.approx(jr.ProjectedLeapfrog.default_step(m, None), rel=1e-15)
+
+
+def test_vector_components_subtract_componentwise():
+    from jaxrod.rod3d.components import add, sub
+
+    assert sub((1.0, 2.0, 3.0), (0.5, 4.0, -1.0)) == (0.5, -2.0, 4.0)
+    assert add(sub((1.0, 2.0, 3.0), (0.5, 4.0, -1.0)), (0.5, 4.0, -1.0)) == (1.0, 2.0, 3.0)
