@@ -6,7 +6,6 @@ c·m·v, and the implicit scheme's βh²(EA/l̂)μ_d g, all three tested in test
 so at the bound f_c the largest far load is f_c minus the rest, and the lock-up length (no far
 load) is where the rest reaches f_c."""
 
-import math
 
 import jax
 import pytest

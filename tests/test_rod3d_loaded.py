@@ -7,7 +7,6 @@ state are array leaves), so the module pays one 3D compilation."""
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 from scipy.optimize import brentq
 
 import jaxrod as jr
