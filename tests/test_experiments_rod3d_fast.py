@@ -715,3 +715,26 @@ def test_crosscheck_times_the_field_search_and_the_3d_runs_apart(monkeypatch):
     monkeypatch.setattr(exp3d, "time", SimpleNamespace(perf_counter=lambda: next(clock)))
     (r,), _ = _crosscheck(monkeypatch, lambda v: v > 0.026)
     assert r["seconds_field"] == 1.23 and r["seconds_rod3d"] == 3.3
+
+
+def test_e1_critical_force_of_each_member_is_its_own_first_peak_past_the_frictionless_load(monkeypatch):
+    """Two members with stand-in reactions: member 0 peaks at 10 N (save 3) and falls 30 %; member
+    1 climbs to 13 N (save 6) and falls, after a 20 % dip below F⁰₆ (1.31 N) that is not buckling. Each
+    member's critical force is its own first peak, at its own displacement."""
+    F0 = float(theory.reference_load(jr.RodChannel.reference(0.3)))
+    R = np.array([[0.0, 5.0, 8.0, 10.0, 7.0, 6.0, 11.0, 12.0, 12.0, 12.0, 12.0],
+                  [0.0, 1.0, 0.8, 6.0, 9.0, 12.0, 13.0, 9.0, 9.0, 9.0, 9.0]])
+    assert 1.0 < F0 < 5.0
+    end_x = 3.0 - np.arange(11.0)[None, :] * np.array([[1e-4], [2e-4]])
+
+    def batched(model, states, t1, n_save, dt, threshold, scheme=None):
+        return SimpleNamespace(observables=dict(reaction=jnp.stack([jnp.zeros_like(jnp.asarray(R)), jnp.asarray(R)], -1),
+                                                end_x=jnp.asarray(end_x)),
+                               buckled=np.array([True, True]), n_steps=np.array([10, 10]),
+                               energy_balance=jnp.zeros((2, 11)))
+
+    monkeypatch.setattr(exp3d, "_batched", batched)
+    res = exp3d.e1_curves(0.3, (10e-3, 30e-3), n=4, t1=0.01, n_save=11, dt=1e-4)
+    np.testing.assert_array_equal(res["critical_force"], [10.0, 13.0])
+    np.testing.assert_allclose(res["d_critical"], [3e-4, 1.2e-3], rtol=1e-12)
+    assert res["peaked"].tolist() == [True, True]
