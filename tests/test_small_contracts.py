@@ -459,3 +459,15 @@ def test_the_3d_rods_energy_terms_are_named_by_kind(rod3d_state):
     model, q, v = rod3d_state
     assert set(model.energy_terms(q, v)) == {"kinetic", "rotational", "stretch", "shear", "bend", "twist", "gravity",
                                             "contact"}
+
+
+@pytest.mark.parametrize("n", range(1, 10))
+def test_the_red_black_halves_are_as_long_as_the_even_nodes(n):
+    """n + 1 nodes split into the even (red) and odd (black) ones, both padded to the red count."""
+    from jaxrod.rod3d.contact import _split, colours
+
+    M = colours(n)
+    assert M == len(range(0, n + 1, 2))
+    red, black = _split(jnp.arange(n + 1.0), M, fill=-1)
+    np.testing.assert_array_equal(red, np.arange(0, n + 1, 2))
+    np.testing.assert_array_equal(black, np.r_[np.arange(1, n + 1, 2), [-1] * (M - len(range(1, n + 1, 2)))])

@@ -55,7 +55,8 @@ def _shift(a, side):
 
 
 def colours(n: int) -> int:
-    """M = ⌈(n + 2)/2⌉: the entries of each colour of the red–black split of n + 1 nodes."""
+    """M = ⌈(n + 1)/2⌉: the entries of the larger colour (the even nodes) of the red–black split of
+    n + 1 nodes, the length both halves are padded to."""
     return (n + 2) // 2
 
 
