@@ -58,7 +58,7 @@ def register_perturbation(name: str, cls) -> None:
     _register(_PERTURBATIONS, "perturbation", name, cls)
 
 
-def _lookup(table: dict, what: str, name: str, argument: str):
+def _lookup(table: dict, name: str, argument: str):
     if name not in table:
         raise ValueError(f"{argument} = {name!r} is invalid: expected one of {tuple(table)}.")
     cls = table[name]
@@ -70,12 +70,12 @@ def _lookup(table: dict, what: str, name: str, argument: str):
 
 def model_class(name: str, argument: str = "model"):
     """The model class registered as `name` (`argument`: the name of the setting, for the error)."""
-    return _lookup(_MODELS, "model", name, argument)
+    return _lookup(_MODELS, name, argument)
 
 
 def perturbation_class(name: str, argument: str = "perturbation"):
     """The perturbation class registered as `name`."""
-    return _lookup(_PERTURBATIONS, "perturbation", name, argument)
+    return _lookup(_PERTURBATIONS, name, argument)
 
 
 def model_names() -> tuple[str, ...]:
