@@ -728,13 +728,16 @@ def test_e1_critical_force_of_each_member_is_its_own_first_peak_past_the_frictio
     end_x = 3.0 - np.arange(11.0)[None, :] * np.array([[1e-4], [2e-4]])
 
     def batched(model, states, t1, n_save, dt, threshold, scheme=None):
+        asked.append((dt, threshold, scheme))
         return SimpleNamespace(observables=dict(reaction=jnp.stack([jnp.zeros_like(jnp.asarray(R)), jnp.asarray(R)], -1),
                                                 end_x=jnp.asarray(end_x)),
                                buckled=np.array([True, True]), n_steps=np.array([10, 10]),
                                energy_balance=jnp.zeros((2, 11)))
 
+    asked = []
     monkeypatch.setattr(exp3d, "_batched", batched)
-    res = exp3d.e1_curves(0.3, (10e-3, 30e-3), n=4, t1=0.01, n_save=11, dt=1e-4)
+    res = exp3d.e1_curves(0.3, (10e-3, 30e-3), n=4, t1=0.01, n_save=11, dt=1e-4, scheme="verlet")
+    assert asked == [(1e-4, 1.0, "verlet")]  # the scheme asked for, labelled at 1 rad
     np.testing.assert_array_equal(res["critical_force"], [10.0, 13.0])
     np.testing.assert_allclose(res["d_critical"], [3e-4, 1.2e-3], rtol=1e-12)
     assert res["peaked"].tolist() == [True, True]
