@@ -671,6 +671,8 @@ def test_e5_runs_each_model_at_105_percent_of_its_own_dF_star_on_e4s_points(tmp_
     fake_scene.record = record
     out = tmp_path / "e5"
     out.mkdir()
+    clock = iter([100.0, 102.34, 200.0, 200.96])  # each model's run timed on its own
+    monkeypatch.setattr(e5m, "time", SimpleNamespace(perf_counter=lambda: next(clock)))
     res = e5m.e5(str(out), quick="tiny", progress=True)
     assert e4_calls == [(str(e4_dir), "tiny", True, None, (0.3,))]
     steps, run3d, stepf, runf = fake_scene.made
@@ -692,6 +694,7 @@ def test_e5_runs_each_model_at_105_percent_of_its_own_dF_star_on_e4s_points(tmp_
         field_second_mode="9")
     assert float(row["share"]) == pytest.approx(0.05**2 / (0.05**2 + 0.02**2), rel=1e-9)
     assert float(row["field_share"]) == pytest.approx(0.8, rel=1e-9)
+    assert (float(row["wall_s"]), float(row["field_wall_s"])) == (2.3, 1.0)
     assert res == {"n": 8, "random-velocity rod3d": {"mu=0.3": [7]}, "random-velocity field": {"mu=0.3": [3]},
                    "random-position rod3d": {"mu=0.3": []}, "random-position field": {"mu=0.3": []}}
     assert capsys.readouterr().out == "  E5 random-velocity, mu = 0.3, realization 0: 3D mode 7 (0.86), field mode 3 (0.80)\n"
