@@ -471,3 +471,19 @@ def test_the_red_black_halves_are_as_long_as_the_even_nodes(n):
     red, black = _split(jnp.arange(n + 1.0), M, fill=-1)
     np.testing.assert_array_equal(red, np.arange(0, n + 1, 2))
     np.testing.assert_array_equal(black, np.r_[np.arange(1, n + 1, 2), [-1] * (M - len(range(1, n + 1, 2)))])
+
+
+def test_an_auxetic_rods_step_bound_is_its_torsional_frequency():
+    """For ν = −0.8 the shear modulus G = E/(2(1 + ν)) = 2.5 E exceeds E: the highest frequency of a
+    free rod segment is torsional, ω² = 4 GJ/(l₀ J_a) with J_a = ρ l₀ πd⁴/32 its polar inertia, so
+    ω = 2√(G/ρ)/l₀ (above the axial 2√(E/ρ)/l₀)."""
+    from jaxrod.rod3d.stiffness import frequency_bound
+
+    rod = jr.RodChannel.reference(0.3, nu=-0.8)
+    n = 6
+    l0 = float(rod.L) / n
+    E, rho = float(rod.E), float(rod.rho_v)
+    G = E / (2 * (1 - 0.8))
+    got = float(frequency_bound(jr.Rod3D(rod, n, gravity=False, channel=False)))
+    assert got == pytest.approx(2 * math.sqrt(G / rho) / l0, rel=1e-12)
+    assert got > 2 * math.sqrt(E / rho) / l0 * 1.5
