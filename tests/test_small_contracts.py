@@ -211,6 +211,14 @@ def test_a_run_reports_each_save_interval_and_whether_it_has_stopped(monkeypatch
     first = stopped.index(True)
     assert not any(stopped[:first]) and all(stopped[first:])
     assert first == int(np.ceil(float(sol.t_buckle) / (0.21 / 8))) - 1
+    # inside a caller's jit the run reports from the compiled loop: the same intervals and flags
+    host = list(ticks)
+    ticks.clear()
+    model, integ = s.model(), s.integrator()
+    run = jax.jit(lambda q, v: jr.simulate(model, integ, q, v, 0.21, n_save=9, throw=False,
+                                           options=jr.RunOptions(save_state=False, progress=True)).buckled)
+    assert bool(run(q0, v0))
+    assert ticks == host
 
 
 def test_the_3d_step_bound_adds_the_wall_stiffness_only_where_gravity_presses_the_rod_on_it():
