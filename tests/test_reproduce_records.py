@@ -3,7 +3,9 @@
 segments passed to the 3D parts, and the entries merged into results.json."""
 
 import json
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from jaxrod import reproduce as rp
@@ -57,3 +59,22 @@ def test_bad_requests_are_one_line_errors_naming_what_is_allowed(tmp_path, kw, m
     with pytest.raises(ValueError, match=match):
         rp.reproduce(out=str(tmp_path), progress=False, **kw)
     assert not (tmp_path / "results.json").exists()
+
+
+def test_an_experiments_numpy_numbers_are_written_as_plain_json_and_progress_is_told(tmp_path, monkeypatch, capsys):
+    """NumPy scalars and arrays in an experiment's result are written as JSON numbers and lists
+    (anything else as its text); with progress each experiment says when it starts and ends."""
+    class Thing:
+        def __str__(self):
+            return "a thing"
+
+    monkeypatch.setattr(rp, "_runners", lambda: {"e2": lambda out, quick, progress: {
+        "x": np.float64(1.5), "i": np.int64(2), "a": np.arange(3), "m": np.eye(2, dtype=np.float32), "t": Thing()}})
+    clock = iter([10.0, 12.26])
+    monkeypatch.setattr(rp, "time", SimpleNamespace(perf_counter=lambda: next(clock)))
+    rp.reproduce("e2", out=str(tmp_path), quick=True, progress=True)
+    e2 = json.loads((tmp_path / "results.json").read_text())["e2"]
+    assert {k: e2[k] for k in "xiamt"} == {"x": 1.5, "i": 2, "a": [0, 1, 2], "m": [[1.0, 0.0], [0.0, 1.0]],
+                                         "t": "a thing"}
+    assert e2["seconds"] == 2.3 and e2["quick"] is True
+    assert capsys.readouterr().out.splitlines() == ["[e2] running (quick) ...", "[e2] done in 2.3 s"]
