@@ -4,6 +4,7 @@ the closed-form stiffness, the explicit leapfrog for the scheme (β = γ = 0 is 
 trapezoidal rule's energy conservation, exact stick, and the explicit scheme's committed v₀*
 (docs/rod3d.md) for the answers."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -64,7 +65,7 @@ def _ad_dense(model, x, Q):
         p = z[3 * (n + 1):].reshape(n, 3)
         return model.potential(xx, jax.vmap(_turned)(p, Q))
 
-    H = np.asarray(jax.hessian(U)(jnp.concatenate([x.ravel(), jnp.zeros(3 * n)])))
+    H = np.asarray(jax.jit(jax.hessian(U))(jnp.concatenate([x.ravel(), jnp.zeros(3 * n)])))  # one program
     perm = []
     for k in range(n + 1):
         perm += [3 * k, 3 * k + 1, 3 * k + 2] + ([3 * (n + 1) + 3 * k + i for i in range(3)] if k < n else [-1] * 3)
@@ -81,7 +82,7 @@ def test_the_element_hessians_are_the_potentials():
     bend, twist, the Hertz wall with nodes in and out of it), to rounding."""
     model, x, Q = _bent_state()
     ref = _ad_dense(model, x, Q)
-    got = _dense(*hessian_blocks_ad(model, x, Q))
+    got = _dense(*eqx.filter_jit(hessian_blocks_ad)(model, x, Q))  # compiled as one program: seconds, not tens
     assert np.abs(got - ref).max() < 1e-12 * np.abs(ref).max()
 
 
@@ -93,7 +94,7 @@ def test_the_closed_form_stiffness_against_ad(turn, damped):
     `damped`: the damping's matrix, shear, bend and twist (no stretch or wall in it)."""
     model, x, Q = _bent_state(turn=turn)
     D, U = hessian_blocks(model, x, Q, damped=damped)
-    Da, Ua = hessian_blocks_ad(model, x, Q, damped=damped)
+    Da, Ua = eqx.filter_jit(hessian_blocks_ad)(model, x, Q, damped=damped)
     if damped:  # it leaves out what the full one has: stretch (and the wall, if touching)
         Df, _ = hessian_blocks(model, x, Q)
         assert float(jnp.abs(Df[:, 0, 0] - D[:, 0, 0]).min()) > 0.5 * float(model.rod.EA / model.l0)
