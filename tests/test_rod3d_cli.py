@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pytest
 
 from jaxrod.cli import main
@@ -101,22 +102,27 @@ def test_departure_search_of_the_3d_rod_lands_in_the_bisection_bracket():
     assert int(dep.evaluations) <= int(bis.evaluations)
 
 
-@pytest.mark.slow  # 12 segments, one forward-mode run (~30 s)
+@pytest.mark.slow  # 12 segments: a bisection and two forward-mode runs (~1 min)
 def test_departure_rate_of_the_3d_rod_is_finite_next_to_its_boundary():
-    """0.01 % above v₀* (24.65 mm/s at ΔF = 5 N, μ = 0.3, 12 segments) the run's tangent
-    stays finite (it was NaN from step 928: 1/|g|⁴ of a vanishing slip impulse in the float32
-    friction pass), and u/(v₀ − v₀*) is the growth rate measured farther out (53–56 s⁻¹)."""
+    """Just above v₀* (ΔF = 5 N, μ = 0.3, 12 segments; v₀* bisected here with the scene's own
+    scheme, to 1e-5) the run's tangent stays finite (it was NaN from step 928: 1/|g|⁴ of a
+    vanishing slip impulse in the float32 friction pass), and u grows linearly in v₀ − v₀*:
+    extrapolated to u = 0 from two points it lands back in the bisection bracket (to 1e-3)."""
     import jax
 
     import jaxrod as jr
     from jaxrod.boundary.search import _resolution, _scene
 
     rod = jr.RodChannel.reference(0.3)
+    bis, _ = jr.boundary.critical_velocity(rod, 5.0, model="rod3d", n=12, method="bisection", rtol=1e-5,
+                                           sensitivities=())
+    assert int(bis.result) == 0
+    v_star = float(bis.hi)  # the smallest buckled amplitude
     n, dt = _resolution(rod, 5.0, "rod3d", 12, 6, None)
     rate = jax.jit(lambda x: jr.boundary.departure_rate(
         lambda v: _scene(rod, 5.0, v, "rod3d", n, 6, dt, "sine", jax.random.key(0)), x))
-    (b1, u1), (b2, u2) = rate(0.02466), rate(0.02470)
-    assert bool(b1) and bool(b2) and 0 < float(u1) < float(u2)
-    lam = (float(u2) - float(u1)) / 4e-5
-    assert 40 < lam < 70
-    assert 0.02464 < 0.02466 - float(u1) / lam < 0.02466
+    x1, x2 = v_star * (1 + 4e-4), v_star * (1 + 2e-3)
+    (b1, u1), (b2, u2) = rate(x1), rate(x2)
+    assert bool(b1) and bool(b2) and np.isfinite(float(u1)) and 0 < float(u1) < float(u2)
+    lam = (float(u2) - float(u1)) / (x2 - x1)
+    assert abs((x1 - float(u1) / lam) / v_star - 1) < 1e-3
