@@ -140,12 +140,13 @@ def test_lock_up_is_told_by_the_far_end_and_the_entry_force():
     assert locked(dict(stalled, f_in=np.where(push > 0.1, np.nan, 4.0))) is None
 
 
-@pytest.mark.slow  # 20 s: one vmapped and one single compilation
+@pytest.mark.slow  # 40 s: two vmapped and one single compilation
 def test_lanes_are_single_injections_and_a_locked_lane_is_held():
     """`inject_lanes`: lane k of one vmapped run is `inject` with its own μ and far load (to 1e-6
-    F₀ and 1e-9 m: the run in parts puts its saves on a slightly different step grid); a lane
-    whose entry force passed `cap` at the end of a part has its entry held still from then on
-    (its push stops, to rounding), while the other lanes go on at the set speed."""
+    F₀ in one part; to 1e-5 F₀ and 1e-9 m in four: the run in parts puts its saves on a slightly
+    different step grid); a lane whose entry force passed `cap` at the end of a part has its entry
+    held still from then on (its push stops, to rounding), while the other lanes go on at the set
+    speed."""
     from jaxrod.lockup.push import inject_lanes, lane
 
     rod = push_rod(1.0, 0.02, 0.5)
@@ -156,7 +157,10 @@ def test_lanes_are_single_injections_and_a_locked_lane_is_held():
     single = inject(push_rod(0.5, 0.02, 0.25), 0.5 * F0, speed, T, n=12, n_save=9, damping=20.0)
     free = lane(rec, 1)
     assert np.all(rec["result"] == 0) and np.isinf(free["held_from"])
-    np.testing.assert_allclose(free["f_in"], single["f_in"], atol=1e-6)
+    np.testing.assert_allclose(free["f_in"], single["f_in"], atol=1e-5)
+    whole = lane(inject_lanes(rod, [0.5, 0.25], [3.0 * F0, 0.5 * F0], speed, T, n=12, n_save=9, chunks=1, cap=2.5,
+                              damping=20.0), 1)
+    np.testing.assert_allclose(whole["f_in"], single["f_in"], atol=1e-6)
     np.testing.assert_allclose(free["u"], single["u"], atol=1e-9)
     np.testing.assert_allclose(np.diff(free["push"]), speed * np.diff(free["t"]), rtol=1e-6)
     held = lane(rec, 0)
