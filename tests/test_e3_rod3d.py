@@ -42,6 +42,15 @@ def test_bisect_gives_up_after_max_runs():
     assert len(calls) == 6
 
 
+def test_bisect_stops_bisecting_at_max_runs_with_the_bracket_it_has():
+    # bracketed by the first two runs (root inside ±4 %), then bisected: 8 runs in all leave a
+    # bracket of 8.3 %/2⁶ ≈ 0.13 %, wider than the rtol of 1e-9 it never reaches
+    label, calls = _counting(1.01)
+    lo, hi = _bisect(label, 1.0, 0.04, 1e-9, 8)
+    assert len(calls) == 8
+    assert lo <= 1.01 < hi and 1e-3 < hi / lo - 1 < 2e-3
+
+
 def test_bisect_gives_up_when_every_amplitude_down_to_a_millionth_buckles():
     # buckles at any v > 0 but not at 0 (a rod the load buckles from its straight state, 3D at
     # 60 N with 60 segments): the downward doubling stops at guess·1e-6 instead of reaching 0
