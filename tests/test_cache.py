@@ -24,6 +24,23 @@ def test_cache_folder_follows_the_platform_and_the_environment(tmp_path):
         assert _cache.cache_dir({_cache.ENV: off}) is None
 
 
+def test_cache_root_on_each_platform(monkeypatch):
+    """macOS: ~/Library/Caches/jaxrod; Windows: %LOCALAPPDATA%\\jaxrod\\Cache (or its default under
+    the home folder); elsewhere $XDG_CACHE_HOME/jaxrod (or ~/.cache/jaxrod)."""
+    home = os.path.expanduser("~")
+    roots = {}
+    for platform, name in (("darwin", "posix"), ("win32", "nt"), ("linux", "posix")):
+        monkeypatch.setattr(_cache.sys, "platform", platform)
+        monkeypatch.setattr(_cache.os, "name", name)
+        roots[platform] = (_cache._user_cache_root({"LOCALAPPDATA": "/L", "XDG_CACHE_HOME": "/X"}),
+                           _cache._user_cache_root({}))
+        monkeypatch.undo()
+    assert roots["darwin"] == (os.path.join(home, "Library", "Caches", "jaxrod"),) * 2
+    assert roots["win32"] == (os.path.join("/L", "jaxrod", "Cache"),
+                              os.path.join(home, "AppData", "Local", "jaxrod", "Cache"))
+    assert roots["linux"] == (os.path.join("/X", "jaxrod"), os.path.join(home, ".cache", "jaxrod"))
+
+
 def _run(args, env_extra, cwd):
     env = {k: v for k, v in os.environ.items() if not k.startswith(("JAX_", "JAXROD_"))}
     env.update({"JAX_EXPLAIN_CACHE_MISSES": "1", "JAX_LOG_COMPILES": "1", **env_extra})

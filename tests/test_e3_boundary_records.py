@@ -90,6 +90,8 @@ def test_write_boundary_writes_the_result_whole_and_one_plain_row_per_load(tmp_p
         assert float(r["bracket_hi_mm_s"]) == pytest.approx(1e3 * p["bracket"][1], rel=1e-9)
         assert float(r["difference_percent"]) == pytest.approx(100 * (p["rod3d"] / p["field"] - 1), rel=1e-9)
         assert (r["n_segments"], r["runs"]) == ("8", str(p["runs"]))
+        assert (float(r["mu"]), float(r["t1"]), float(r["dt"])) == (res["mu"], res["t1"], res["dt"])
+        assert float(r["field_mm_s"]) == pytest.approx(1e3 * p["field"], rel=1e-9)
     assert (tmp_path / "b.png").stat().st_size > 0
 
 
