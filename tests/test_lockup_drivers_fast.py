@@ -219,6 +219,36 @@ def test_the_files_carry_every_lane_stage_and_profile_with_the_soft_string_besid
     assert (tmp_path / "curve.png").stat().st_size > 0
 
 
+def test_each_helix_law_column_is_the_comparisons_number_in_its_units(tmp_path, monkeypatch):
+    """helix_laws.csv holds `helix_against_laws`' numbers of each steady profile (a stand-in
+    here, with known numbers, called with the profile and the job's rod), lengths over ℓ and
+    forces over F₀, ratios as they are."""
+    from jaxrod.lockup import laws
+
+    results = _hand_results()
+    res, prof = results[0], results[0]["lanes"][0]["profiles"][0]
+    seen = []
+    hx = dict(inner_length=0.3 * ELL, F_range=(1.5 * F0, 2.25 * F0), pitch_ratio=1.1, N_ratio=0.9,
+              N_ratio_with_weight=0.8, soft_string_ratio=1.05, soft_string_ratio_whole=0.95,
+              winding_length=0.4 * ELL, reversals=3, wall_ratio_winding=0.7)
+
+    def stand_in(theta, wall_force, axial_force, l0, EI, w, r, mu, wave):
+        seen.append((theta, wall_force, axial_force, l0, EI, w, r, mu, wave))
+        return hx
+
+    monkeypatch.setattr(laws, "helix_against_laws", stand_in)
+    lx._write(str(tmp_path), dict(lx.SETTINGS["tiny"], f_c=1.5), results, 7.0)
+    assert seen == [(prof["theta"], prof["wall_force"], prof["axial_force"], res["l0"], res["EI"], res["w"], res["r"],
+                     prof["mu"], 2 * math.pi * math.sqrt(res["ell"] * res["r"]))]
+    (law,) = _rows(tmp_path / "helix_laws.csv")
+    got = {k: float(v) for k, v in law.items() if k != "varies"}
+    assert got == pytest.approx(dict(
+        muL_over_ell=0.5, n_segments=4, push_speed=0.01, parameter=2.0, entry_force_over_F0=2.5,
+        helical_compared_over_ell=0.3, F_lo_over_F0=1.5, F_hi_over_F0=2.25, pitch_over_lubinski=1.1,
+        N_over_mitchell=0.9, N_over_mitchell_plus_w=0.8, dF_ds_over_mu_N=1.05, whole_rod_dF_over_mu_int_N=0.95,
+        winding_over_ell=0.4, hand_reversals=3, winding_int_N_over_int_mitchell=0.7), rel=1e-12)
+
+
 def test_the_jobs_run_costliest_first_and_a_job_already_run_with_the_same_settings_is_skipped(
         tmp_path, monkeypatch, capsys):
     S = dict(groups=((2.0, (0.5, 1.0), None), (4.0, (3.0,), "auto")), f_c=6.0,
