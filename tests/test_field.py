@@ -70,6 +70,8 @@ def test_modal_analysis():
     p = jr.modal.modal_spectrum(theta)
     np.testing.assert_allclose(float(p.sum()), 1.0)
     assert float(p[6]) == pytest.approx(0.9, rel=1e-9)
+    flat = jr.modal.modal_spectrum(jnp.zeros((2, n)))  # θ ≡ 0: no power in any mode
+    assert flat.shape == (2, n) and not np.asarray(flat).any()
 
 
 # -- hierarchy consistency --------------------------------------------------------------------

@@ -496,3 +496,28 @@ def test_an_auxetic_rods_step_bound_is_its_torsional_frequency():
     got = float(frequency_bound(jr.Rod3D(rod, n, gravity=False, channel=False)))
     assert got == pytest.approx(2 * math.sqrt(G / rho) / l0, rel=1e-12)
     assert got > 2 * math.sqrt(E / rho) / l0 * 1.5
+
+
+def test_the_pushed_end_of_the_3d_rod_does_the_work_of_its_reaction_times_its_speed():
+    """Displacement control: the rod compressed by 2 N, its end pushed in at 1 mm/s; in a step of
+    h the driven end puts h × (the reaction the load cell reads) × (its speed) into the rod [J]."""
+    model = jr.Rod3D(jr.RodChannel.reference(0.3), 6, control="displacement", speed=1e-3)
+    q, v = model.initial_state(2.0)
+    a = model.accelerations(q, v, 0.0)
+    reaction = float(model.observables(q, v, a, 0.0)["reaction"][1])
+    assert reaction == pytest.approx(2.0, rel=1e-9) and float(v.v[-1, 0]) == -1e-3
+    _, work_in = model.impulse_work(v, v, v, a, 1e-5)
+    assert float(work_in) == pytest.approx(1e-5 * reaction * 1e-3, rel=1e-12)
+
+
+def test_a_3d_rod_without_a_channel_starts_on_the_axis_and_one_in_a_channel_on_its_bottom():
+    """Straight states: without a channel the nodes lie on the x axis (z = 0); in the channel
+    the rod rests on the bottom wall, z = −(R + its sag into the wall under its weight)."""
+    rod = jr.RodChannel.reference(0.3)
+    free = jr.Rod3D(rod, 6, channel=False, gravity=False, control="force")
+    q, _ = free.initial_state(0.0)
+    assert not np.asarray(q.x[:, 1:]).any()
+    held = jr.Rod3D(rod, 6)
+    q, _ = held.initial_state(0.0)
+    np.testing.assert_allclose(np.asarray(q.x[:, 2]), -(float(rod.R) + float(held.static_sag())), rtol=1e-12)
+    assert float(held.static_sag()) > 0
