@@ -625,6 +625,22 @@ def test_e6c_searches_dF_star_then_runs_at_105_percent_and_at_40_N(tmp_path, mon
     assert e6m.e6c(str(tmp_path), quick="tiny", progress=False, n=48) == res and len(fake_scene.made) == 2
 
 
+def test_e6c_interrupted_after_its_first_case_runs_only_the_other(tmp_path, monkeypatch, fake_scene):
+    """A CSV that holds the 1.05 ΔF* row but not the 40 N one (a run stopped between them): E6C
+    searches again (ΔF* is not in the file for the missing case) and runs the 40 N case alone."""
+    monkeypatch.setattr(e6m, "_critical_load", lambda rod, a, kind, key, model, *rest: (
+        (_root(5.0), 0.5) if model == "field" else (_root(6.0, 5.8, 6.2, 9, 0), 4.0)))
+    fake_scene.record = lambda sc: _record_3d(sc.n, [(2, 0.01)], [(4, 0.03), (6, 0.01)])
+    first = e6m.e6c(str(tmp_path), quick="tiny", progress=False, n=48)
+    path = tmp_path / "rod3d_random_position_n48.csv"
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(lines[:2]) + "\n")  # the header and the 1.05 ΔF* row
+    fake_scene.made = []
+    again = e6m.e6c(str(tmp_path), quick="tiny", progress=False, n=48)
+    assert [s.dF for s in fake_scene.made] == [40.0]
+    assert again == first and [r["case"] for r in _read(path)] == ["1.05 dF*", "paper's 40 N"]
+
+
 def test_e6c_records_a_failed_search_without_its_run_and_still_runs_40_N(tmp_path, monkeypatch, fake_scene):
     """A 3D search that failed (ΔF* not finite) is recorded on the 1.05 ΔF* row without a run, so
     that it is not searched again; the run at the paper's 40 N does not need ΔF* and is made."""

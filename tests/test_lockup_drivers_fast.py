@@ -273,6 +273,7 @@ def test_the_jobs_run_costliest_first_and_a_job_already_run_with_the_same_settin
                    ((2.0, (0.5, 1.0), None), (16, 0.01), True), ((2.0, (1.0,), None), (24, 0.01), True)]
     assert "lock-up: 6 staircase(s) to run on 1 worker(s), f_c = 6 F0" in capsys.readouterr().out
     assert summary["jobs_wall_s"] == [1.0] * 6 and summary["settings"] == S
+    assert isinstance(summary["wall_s_this_call"], float) and 0.0 <= summary["wall_s_this_call"] < 60.0
     assert [r["segments_per_wave"] for r in summary["onsets"]] == [16, 16, 24]
     # again: every job is there with the same settings; one removed and one of other settings run again
     ran.clear()
