@@ -473,6 +473,11 @@ def test_convergence_tabulates_each_search_and_the_modes_past_it(tmp_path, monke
                            dominant_mode="nan")
     assert rows[-1] == dict(perturbation="random-position", mu="0.9", n="20", realization="1", dF_star="63.0",
                             dominant_mode="8.0")
+    # one resolution per kind: no change between resolutions to report (NaN), the rest as before
+    conv.SIZES["tiny"]["n"] = {"random-velocity": (16,), "random-position": (12,)}
+    one = conv.convergence(str(tmp_path), quick="tiny", progress=False, max_dF=50.0)
+    assert all(math.isnan(one[k]["last_change_rel"]) for k in one if ", mu=" in k)
+    assert one["random-velocity, mu=0.3"]["dF_star_mean"] == [160.0]
     assert (tmp_path / "convergence.png").stat().st_size > 0
 
 

@@ -200,6 +200,9 @@ def test_the_files_carry_every_lane_stage_and_profile_with_the_soft_string_besid
         assert float(p["axial_force"]) == prof["axial_force"][min(i, 3)]
         assert (p["muL_over_ell"], p["parameter"], p["mu"], p["n_segments"]) == ("0.5", "2.0", "0.5", "4")
         assert float(p["EI"]) == float(ROD.EI) and float(p["r"]) == float(ROD.R)
+        assert float(p["w"]) == float(ROD.rho * ROD.g)
+    assert list(profiles[0]) == ["muL_over_ell", "n_segments", "push_speed", "parameter", "node", "s_from_far_end",
+                                 "theta", "wall_force", "axial_force", "mu", "EI", "w", "r"]
     (law,) = _rows(tmp_path / "helix_laws.csv")
     assert (law["varies"], law["parameter"], law["entry_force_over_F0"]) == ("far_load", "2.0", "2.5")
     # the friction's bookkeeping over the whole rod: (F at the entry − F at the far end)/(μ ∫N ds)
