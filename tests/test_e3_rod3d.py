@@ -73,6 +73,11 @@ def test_runs_file_of_older_columns_is_read_as_verlet_and_migrated(tmp_path):
     assert path.read_text().splitlines()[0] == ",".join(RUN_COLUMNS)
     assert _runs_of(str(path), *settings, "verlet") == {(5.0, 0.026): True}
     assert _runs_of(str(path), *settings, "leapfrog") == {(5.0, 0.025): False}
+    # a step within DT_RTOL (1e-3) of the recorded one is the same run; one step further is not
+    near, far = list(settings), list(settings)
+    near[3], far[3] = 1e-5 * (1 + 0.5e-3), 1e-5 * (1 + 2e-3)
+    assert _runs_of(str(path), *near, "leapfrog") == {(5.0, 0.025): False}
+    assert _runs_of(str(path), *far, "leapfrog") == {}
 
 
 @pytest.mark.slow
