@@ -53,6 +53,13 @@ def test_extents_tell_a_helix_from_a_sinusoid():
     ds = s[1] - s[0]
     assert 4.0 - ds <= hel[0] <= 4.0 + 0.5 * wave + ds
     assert 3.0 - ds <= sin[0] <= 3.0 + 1.5 * wave + ds
+    # the lanes' records, (lanes, saves, nodes): each lane's extents are its own (θ unwrapped
+    # along the rod, the last axis, whatever comes before it)
+    lanes = np.stack([np.stack([theta, np.zeros_like(theta)]), np.stack([np.zeros_like(theta), theta])])
+    hel2, sin2 = extents(lanes, s, wave)
+    assert hel2.shape == (2, 2)
+    np.testing.assert_array_equal(hel2, [[hel[0], 0.0], [0.0, hel[0]]])
+    np.testing.assert_array_equal(sin2, [[sin[0], 0.0], [0.0, sin[0]]])
 
 
 def test_a_short_rod_passes_the_pushed_force_less_the_friction_of_the_rod():
