@@ -92,3 +92,10 @@ def test_root_continuation_seeds_each_bracket_with_the_last_root_and_falls_back_
     # a seeded bracket only 1 % wide around 1.1 misses 5.0 as well: found in the full bracket
     stuck = continuation(lambda x, eps: x - r[eps], [0.1, 0.01], 0.1, 10.0, rtol=1e-12, widen=1.01)
     assert float(stuck[1].root) == pytest.approx(5.0, rel=1e-10)
+
+
+def test_the_progress_bar_counts_the_points_of_the_curve(capsys):
+    """With `progress`, a bar that counts the points out of their number."""
+    _along_curve(_Search(), np.array([4.0, 1.0, 2.0]), lambda x: x**2 / 100, (1e-4, 10.0), 0.02, True)
+    err = capsys.readouterr().err
+    assert "0/3" in err and "point" in err  # (the bar redraws at most every 0.1 s)

@@ -186,3 +186,11 @@ def test_critical_load_brackets_to_rtol_in_the_load():
                          atol=math.log1p(1e-2))
         lo, hi = math.exp(float(r.lo)), math.exp(float(r.hi))
         assert int(r.result) == 0 and lo <= target <= hi and hi / lo - 1 <= 1e-2
+
+
+def test_safeguarded_newton_by_default_finds_the_root_to_1e_10():
+    """With its default tolerance (1e-10 relative) the search of x³ = 0.1 on [0.1, 1] gives the
+    cube root to 1e-10 relative (a Newton step from 1 alone lands at 0.7)."""
+    res = bd.safeguarded_newton(lambda x: x**3 - 0.1, 0.1, 1.0)
+    assert int(res.result) == 0
+    assert float(res.root) == pytest.approx(0.1 ** (1 / 3), rel=1e-10)

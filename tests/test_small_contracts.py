@@ -56,6 +56,9 @@ def test_sine_shape_is_the_mode_at_the_interior_nodes():
     got = np.asarray(sine_shape(5, 2))
     np.testing.assert_allclose(got, np.sin(np.pi * 2 * np.arange(1, 6) / 6), atol=1e-15)
     assert got.shape == (5,)
+    single = sine_shape(5, 2.0, dtype=jnp.float32)  # in the dtype asked for, the mode number too
+    assert single.dtype == jnp.float32
+    np.testing.assert_allclose(np.asarray(single), got, atol=1e-6)
 
 
 @pytest.mark.parametrize("intervals", [1, 7, 20, 40, 97, 200, 509, 800, 1024, 4 * 97])
@@ -521,3 +524,17 @@ def test_a_3d_rod_without_a_channel_starts_on_the_axis_and_one_in_a_channel_on_i
     q, _ = held.initial_state(0.0)
     np.testing.assert_allclose(np.asarray(q.x[:, 2]), -(float(rod.R) + float(held.static_sag())), rtol=1e-12)
     assert float(held.static_sag()) > 0
+
+
+def test_a_step_past_the_limit_is_flagged_unless_the_caller_checked_it():
+    """`integrate` at 1.5× the stability limit (a few steps, still finite): the result code is
+    `step_limit`; with `check_step_limit=False` (the caller checked the concrete model) it is not."""
+    from jaxrod.perturbations import SineVelocity
+
+    s = jr.Scene(jr.RodChannel.reference(0.3), 2.0, SineVelocity(1e-3), kind="field", n=16)
+    model, (q0, v0) = s.model(), s.initial_state()
+    limit = float(jr.ProjectedVerlet(1.0).step_limit(model))
+    integ = jr.ProjectedVerlet(1.5 * limit)
+    codes = [int(integ.integrate(model, q0, v0, 3 * limit, 2, jr.RunOptions(), check_step_limit=c).result)
+             for c in (True, False)]
+    assert codes == [int(jr.RESULTS.step_limit), int(jr.RESULTS.successful)]
