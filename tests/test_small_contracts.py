@@ -538,3 +538,14 @@ def test_a_step_past_the_limit_is_flagged_unless_the_caller_checked_it():
     codes = [int(integ.integrate(model, q0, v0, 3 * limit, 2, jr.RunOptions(), check_step_limit=c).result)
              for c in (True, False)]
     assert codes == [int(jr.RESULTS.step_limit), int(jr.RESULTS.successful)]
+
+
+def test_the_deprecated_bisect_halves_in_log_space_unless_told_otherwise():
+    """`jaxrod.search.bisect` (deprecated, warns): one halving of [0.1, 10] takes the geometric
+    midpoint 1 by default and the arithmetic one 5.05 with `geometric=False`."""
+    with pytest.warns(DeprecationWarning):
+        lo, hi = jr.search.bisect(lambda x: x > 0.5, 0.1, 10.0, 1)
+    assert (float(lo), float(hi)) == (0.1, pytest.approx(1.0, rel=1e-15))
+    with pytest.warns(DeprecationWarning):
+        lo, hi = jr.search.bisect(lambda x: x > 0.5, 0.1, 10.0, 1, geometric=False)
+    assert (float(lo), float(hi)) == (0.1, pytest.approx(5.05, rel=1e-15))
