@@ -180,6 +180,8 @@ def test_the_files_carry_every_lane_stage_and_profile_with_the_soft_string_besid
                                "L_over_ell", "stages", "segments_per_turn_sliding", "helix_angle_sliding_deg",
                                "muL_lock_lo", "muL_lock_hi"]
     assert (lock["status"], lock["stages"], lock["muL_lock_lo"], lock["muL_lock_hi"]) == ("open", "1", "0.5", "nan")
+    assert (lock["n_segments"], lock["push_speed"], lock["segments_per_wave"], lock["L_over_ell"]) == (
+        "4", "0.01", "8", "1.0")
     assert (lock["segments_per_turn_sliding"], lock["helix_angle_sliding_deg"]) == ("inf", "0.0")  # none slid
     for k in VARIANTS:
         assert float(lock[f"soft_{k}_at_fc"]) == pytest.approx(1.5, rel=1e-9)
