@@ -45,9 +45,9 @@ def test_e6_runs_the_papers_three_cases_and_records_each_runs_spectra(e6_tiny):
     labels = ["sine mode 6, μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s", "random position, μ = 0.9, ΔF = 40 N",
               "random position, μ = 0.9, ΔF = 1.05 ΔF* = 21.0 N"]
     assert [k for k in res if k in labels] == labels
-    for label, dF in zip(labels, (5.0, 40.0, 21.0)):
+    for label, mu, dF in zip(labels, (0.3, 0.9, 0.9), (5.0, 40.0, 21.0)):
         r = res[label]
-        assert r["n"] == 24 and r["dF"] == pytest.approx(dF)
+        assert r["n"] == 24 and r["mu"] == mu and r["dF"] == pytest.approx(dF)
         assert 1 <= r["dominant_mode_before"] <= 24 and 0 < r["dominant_power_after"] <= 1
     assert res[labels[0]]["dominant_mode_before"] == 6  # the sine velocity is mode 6 alone at first
     assert res["full_model"] == {"full": "tiny"}

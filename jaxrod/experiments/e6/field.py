@@ -53,7 +53,7 @@ def e6(out, quick, progress):
         p_before = np.asarray(modal_spectrum(q[i_before], len(m)))
         p_after = np.asarray(modal_spectrum(q[i_after], len(m)))
         spectra.append((label, m, p_before, p_after, ts[i_before], ts[i_after], bool(sol.buckled)))
-        res[label] = {"n": n, "dF": dF, "buckled": bool(sol.buckled), "t_buckle": float(sol.t_buckle),
+        res[label] = {"n": n, "mu": mu, "dF": dF, "buckled": bool(sol.buckled), "t_buckle": float(sol.t_buckle),
                       "dominant_mode_before": int(np.argmax(p_before)) + 1,
                       "dominant_mode_after": int(np.argmax(p_after)) + 1,
                       "dominant_power_after": float(np.max(p_after)),
