@@ -41,7 +41,8 @@ def _run(mu, dF, v0):
         integ = jr.integrators.default_for(m, DT)
         return integ.integrate(m, q, v, T1, N_SAVE, jr.RunOptions(save_state=False), check_step_limit=False)
 
-    # one rod after the other (`lax.map`), not `vmap`: the batched loop compiled 3× longer
+    # one rod after the other (`lax.map`), not `vmap`: a vmapped 3D run compiles ~1.8× longer (16 s
+    # against 9 s at 20 segments, alone on a 2-core CPU); this module 37 → 27 s of CPU cold
     return jax.lax.map(lambda a: one(*a), (mu, dF, v0))
 
 
