@@ -14,7 +14,9 @@ failing tests and how each failed. Per mutant:
   counted in the json (`tests_mapped` against `tests_run`);
 - timeout: `--timeout-base` + 3 × the chosen tests' stats time (wall clock; the process group is
   killed); a timed-out mutant counts as not killed, as does one no test reaches ("no tests") and
-  one whose pytest crashed (a signal);
+  one whose pytest crashed (a signal); a mutant that breaks a test module's import (pytest's exit 4,
+  "found no collectors", with the collection error recorded) is killed like any failure, its
+  killing "test" the module, and the control below runs that module's chosen tests with no mutant;
 - a mutant whose first failure is an exception (not an assertion) is run once more on the same
   tests without `-x`: "exception only" when none of them fails on an assertion;
 - control: the killing test is run alone with no mutant active (once per test); if it fails
@@ -179,6 +181,8 @@ def _pytest(work: str, name: str, tests: list[str], timeout: float, first_only: 
         return "no tests", rec, seconds
     if rc in (1, 2, 3) and rec.get("failures"):
         return "killed", rec, seconds
+    if rc == 4 and any(f["when"] == "collect" for f in rec.get("failures", [])):
+        return "killed", rec, seconds  # a test module no longer imports: pytest found no collectors
     return ("crashed" if rc < 0 else f"error {rc}"), rec, seconds
 
 
@@ -201,7 +205,10 @@ def run_one(work: str, name: str, stats: dict, failed: set[str], budget: float, 
             out.update(exception_only=not assertion and s2 == "killed", recheck=s2, recheck_s=round(sec2, 1),
                        assertion_test=assertion[0] if assertion else None)
         if f["test"] not in controls:  # the killing test alone, no mutant active: it must pass
-            s3, _, sec3 = _pytest(work, "", [f["test"]], out["timeout_s"], True)
+            alone = [f["test"]]  # a module that failed to import: its tests of this mutant
+            if f["when"] == "collect":
+                alone = [t for t in tests if t.split("::")[0] == f["test"].split("::")[0]] or alone
+            s3, _, sec3 = _pytest(work, "", alone, out["timeout_s"], True)
             controls[f["test"]] = s3
             out["control_s"] = round(sec3, 1)
         if controls[f["test"]] != "survived":

@@ -11,6 +11,10 @@
 - `JAXROD_MUTANTS_STATS_FAILED=PATH` (during mutmut's stats run): a test that fails on the mutated
   copy with no mutant active is appended to PATH and reported as skipped, so the stats run
   (`pytest -x`) goes on; the held-out runner leaves such tests out.
+- During mutmut's stats run (`MUTANT_UNDER_TEST=stats`), the functions a fixture of wider scope
+  (module, class, package, session) calls while it is set up are credited to every test that
+  requests the fixture, not only to the first (mutmut credits what runs to the test running, and
+  a module-scoped fixture runs once, inside the first test's setup).
 """
 
 from __future__ import annotations
@@ -22,6 +26,38 @@ import sys
 import pytest
 
 _failures: list[dict] = []
+_by_fixture: dict[int, set[str]] = {}  # id(FixtureDef) -> functions its setups called (stats run)
+
+
+def _stats_run() -> bool:
+    return os.environ.get("MUTANT_UNDER_TEST") == "stats" and "mutmut" in sys.modules
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_fixture_setup(fixturedef, request):
+    if not _stats_run() or fixturedef.scope == "function":
+        yield
+        return
+    from mutmut.state import state
+
+    outer, state()._stats = state()._stats, set()  # what this fixture's setup calls, alone
+    try:
+        yield
+    finally:
+        mine = state()._stats
+        _by_fixture.setdefault(id(fixturedef), set()).update(mine)
+        state()._stats = outer | mine
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_setup(item):
+    yield
+    if _stats_run():
+        from mutmut.state import state
+
+        for defs in item._fixtureinfo.name2fixturedefs.values():
+            for d in defs:
+                state()._stats.update(_by_fixture.get(id(d), ()))
 
 
 def _how(excinfo) -> tuple[str, str, str]:
