@@ -70,6 +70,9 @@ def test_boundary_3d_replays_finished_runs_of_the_same_settings_only(tmp_path, s
     again = e3.boundary_3d([10.0], **kw)
     assert len(synthetic) == n_first  # every label read back from the file
     assert again["points"][0]["bracket"] == first["points"][0]["bracket"]
+    assert again["points"][0]["runs"] == first["points"][0]["runs"] > 0  # the labels it used, new or not
+    assert again["points"][0]["seconds_new_runs"] == 0.0 <= first["points"][0]["seconds_new_runs"]
+    assert first["points"][0]["seconds_new_runs"] <= first["points"][0]["seconds"]
     e3.boundary_3d([10.0], ends="clamped", **kw)  # other ends: other runs
     assert len(synthetic) == 2 * n_first
     assert np.isfinite(first["points"][0]["rod3d"])

@@ -104,6 +104,7 @@ def test_e4_tabulates_each_case_against_its_law_and_draws_them(tmp_path, monkeyp
     assert res["random position (forces ±2 N/m for 1 ms)"]["frictionless_dF_star"] == 0.5
     # every search's evaluations are counted: 7 per realization and μ
     assert [res[k]["evaluations_total"] for k in ("sine 15 mm/s", "random velocity ±15 mm/s")] == [7 * 3, 7 * 3 * 2]
+    assert all(0.0 <= res[k]["seconds"] < 60.0 for k in res if isinstance(res[k], dict) and "exponent" in res[k])
     rows = list(csv.DictReader(open(tmp_path / "e4_critical_load.csv")))
     assert len(rows) == 4 * 3 and rows[0]["case"] == "sine 7.5 mm/s" and float(rows[0]["mu"]) == 0.1
     assert (tmp_path / "e4_critical_load.png").stat().st_size > 0
@@ -156,3 +157,67 @@ def test_e4s_independent_modes_bound_uses_each_realizations_own_noise():
         - float(theory.reference_load(rod)) for r in range(2)]
     assert got.shape == (2,) and got[1] == pytest.approx(np.mean(per), rel=1e-12)
     assert per[0] != per[1] and got[0] != got[1]
+
+
+def test_e4_without_a_set_resolution_takes_each_perturbations_default_from_the_scene(tmp_path, monkeypatch):
+    """With `n` unset (the full setting) each case's searches run at the scene's default size for
+    its perturbation: 499 nodes for the random velocity (every mode of the 500-segment noise grid)."""
+    from jaxrod.experiments._settings import _settings
+    from jaxrod.params import RodChannel
+    from jaxrod.scene import Scene, make_perturbation
+
+    e4m = importlib.import_module("jaxrod.experiments.e4.field")
+    seen = {}
+
+    class Curve:
+        def __init__(self, root):
+            self.root, self.result, self.evaluations = root, np.zeros(root.shape, int), np.ones(root.shape, int)
+
+    def curve(mus, amp, perturbation, realizations, **kw):
+        seen.setdefault(perturbation, set()).add(kw["n"])
+        return Curve(np.ones((len(mus), realizations))), None
+
+    monkeypatch.setattr(e4m, "_settings", lambda quick: {**_settings("tiny"), "n": None})
+    monkeypatch.setattr(jaxrod.boundary, "critical_load_curve", curve)
+    monkeypatch.setattr(e4m, "_frictionless_dF", lambda s, amp, kind: (0.5, 0))
+    monkeypatch.setattr(e4m, "_independent_modes", lambda mus, amp, reals, seed: np.full(len(mus), 3.0))
+    e4m.e4(str(tmp_path), "tiny", False)
+    assert seen["random-velocity"] == {499}
+    rod = RodChannel.reference()
+    assert seen["sine"] == {Scene(rod, 300.0, make_perturbation("sine", 15e-3), "field").size()}
+    assert seen["random-position"] == {Scene(rod, 300.0, make_perturbation("random-position", 2.0), "field").size()}
+
+
+def test_e6_checks_rolling_at_each_setting_with_loads_to_check(tmp_path, monkeypatch):
+    """Where the setting lists 3D loads (quick and full), E6 also runs the rolling check (a rod the
+    field model calls stuck, friction at the surface and at the axis) and records what it returns."""
+    monkeypatch.setattr(jaxrod.boundary, "critical_load", lambda rod, amplitude, **kw: (_Root(20.0), None))
+    monkeypatch.setattr(exp3d, "e6_full", lambda out, quick, progress: {})
+    monkeypatch.setattr(exp3d, "crosscheck_critical_velocity", lambda dFs, n, progress, friction_at="surface": {})
+    monkeypatch.setitem(exp3d.SIZES, "tiny", {**exp3d.SIZES["tiny"], "dFs": (5.0, 10.0), "n_cross": 8})
+    monkeypatch.setattr(exp3d, "rolling_check", lambda dF, n: {"dF": dF, "n": n})
+    res = e6m.e6(str(tmp_path), "tiny", False)
+    assert res["rolling_check"] == {"dF": 20.0, "n": 8}
+
+
+def test_e6_takes_the_spectrum_before_at_the_first_save_the_perturbation_has_moved(e6_tiny):
+    """The spectrum "before" is that of the first saved state that is not the straight rod: the
+    first save for a random position (displaced from the start), the second for a sine velocity
+    (the rod starts straight and moving)."""
+    from jaxrod.modal import modal_spectrum
+    from jaxrod.params import RodChannel
+    from jaxrod.scene import Scene, make_perturbation
+
+    import jax
+
+    res, _, out = e6_tiny
+    rows = list(csv.DictReader(open(out / "e6_spectra.csv")))
+    cases = [("sine mode 6, μ = 0.3, ΔF = 5 N, v₀ = 35 mm/s", 0.3, 5.0, make_perturbation("sine", 35e-3, 6), 1),
+             ("random position, μ = 0.9, ΔF = 40 N", 0.9, 40.0,
+              make_perturbation("random-position", 2.0, 6, jax.random.key(6)), 0)]
+    for label, mu, dF, pert, first in cases:
+        q = np.asarray(Scene(RodChannel.reference(mu=mu), dF, pert, "field", 24).run(t1=0.5, n_save=501).q)
+        assert not np.any(q[:first] != 0) and np.any(q[first] != 0)
+        want = np.asarray(modal_spectrum(q[first], 24))
+        got = [float(r["power_before"]) for r in rows if r["case"] == label]
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-15)

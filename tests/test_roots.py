@@ -194,3 +194,34 @@ def test_safeguarded_newton_by_default_finds_the_root_to_1e_10():
     res = bd.safeguarded_newton(lambda x: x**3 - 0.1, 0.1, 1.0)
     assert int(res.result) == 0
     assert float(res.root) == pytest.approx(0.1 ** (1 / 3), rel=1e-10)
+
+
+def test_the_three_root_finders_results_can_be_chosen_between_inside_jit():
+    """Newton, bisection and the departure search return `RootResult`s of one structure and
+    dtypes, so a jitted search can pick its method per case with `lax.switch`; each finds the
+    root x* = 1 of its own view of one boundary and reports converged (0)."""
+    label = lambda x: jnp.where(x > 1.0, 1.0, 0.0)  # noqa: E731
+    ev = lambda x: (x > 1.0, jnp.where(x > 1.0, 50.0 * (x - 1.0), jnp.nan))  # noqa: E731
+    smooth = lambda x: x**3 - 1.0  # noqa: E731
+    branches = [lambda: bd.safeguarded_newton(smooth, 0.5, 4.0, rtol=1e-10),
+                lambda: bd.bisection(label, 0.5, 4.0, rtol=1e-6),
+                lambda: bd.departure_secant(ev, 0.5, 4.0, 1e3, rtol=1e-6)]
+    pick = jax.jit(lambda i: jax.lax.switch(i, branches))
+    for i in range(3):
+        r = pick(i)
+        assert int(r.result) == bd.ROOT_RESULTS.converged and float(r.root) == pytest.approx(1.0, rel=1e-5)
+
+
+def test_the_point_searches_take_the_horizon_of_the_curves_by_default(monkeypatch):
+    """`critical_velocity` and `critical_load` run each label to the same default horizon `t1` as
+    `boundary_curve` and `critical_load_curve`, whose points they are."""
+    import inspect
+
+    from jaxrod.boundary import search
+
+    seen = []
+    monkeypatch.setattr(search, "_critical", lambda *a, **kw: seen.append(kw["t1"]))
+    bd.critical_velocity(ROD, 5.0)
+    bd.critical_load(ROD, 0.02)
+    curves = {inspect.signature(f).parameters["t1"].default for f in (bd.boundary_curve, bd.critical_load_curve)}
+    assert len(curves) == 1 and seen == [curves.pop()] * 2
