@@ -203,7 +203,8 @@ def test_e6_checks_rolling_at_each_setting_with_loads_to_check(tmp_path, monkeyp
 def test_e6_takes_the_spectrum_before_at_the_first_save_the_perturbation_has_moved(e6_tiny):
     """The spectrum "before" is that of the first saved state that is not the straight rod: the
     first save for a random position (displaced from the start), the second for a sine velocity
-    (the rod starts straight and moving)."""
+    (the rod starts straight and moving). Each case records its run's verdict, buckling time and
+    energy balance."""
     from jaxrod.modal import modal_spectrum
     from jaxrod.params import RodChannel
     from jaxrod.scene import Scene, make_perturbation
@@ -216,7 +217,11 @@ def test_e6_takes_the_spectrum_before_at_the_first_save_the_perturbation_has_mov
              ("random position, μ = 0.9, ΔF = 40 N", 0.9, 40.0,
               make_perturbation("random-position", 2.0, 6, jax.random.key(6)), 0)]
     for label, mu, dF, pert, first in cases:
-        q = np.asarray(Scene(RodChannel.reference(mu=mu), dF, pert, "field", 24).run(t1=0.5, n_save=501).q)
+        sol = Scene(RodChannel.reference(mu=mu), dF, pert, "field", 24).run(t1=0.5, n_save=501)
+        q = np.asarray(sol.q)
+        r = res[label]  # the run's verdict and its energy balance, as the run reports them
+        assert r["buckled"] == bool(sol.buckled) and r["t_buckle"] == pytest.approx(float(sol.t_buckle), nan_ok=True)
+        assert r["energy_balance_error"] == pytest.approx(float(sol.energy_balance_error()), rel=1e-9, abs=1e-15)
         assert not np.any(q[:first] != 0) and np.any(q[first] != 0)
         want = np.asarray(modal_spectrum(q[first], 24))
         got = [float(r["power_before"]) for r in rows if r["case"] == label]
