@@ -362,7 +362,7 @@ def test_a_tiny_lockup_run_writes_its_job_and_the_files_from_it(tmp_path, monkey
 # jaxrod.lockup.push.inject_lanes
 
 
-def test_each_lane_is_its_own_injection_at_the_soft_string_force_of_its_mu_and_far_load():
+def test_each_lane_is_its_own_injection_at_the_soft_string_force_of_its_mu_and_far_load(capsys):
     """Two lanes (μ = 0.5 against 1.5 F₀, μ = 0.05 against 0.5 F₀) pushed 10 mm in five parts: once the
     start's axial wave has died out (damping 20/s: e^{−10 t}) each lane's entry carries its own far
     load plus X(1 − 1/2n) + bias, plus the drag (the straight rod of tests/test_lockup_push.py), so
@@ -371,6 +371,7 @@ def test_each_lane_is_its_own_injection_at_the_soft_string_force_of_its_mu_and_f
     rounding while the other, against 4 F₀ with a cap of 3 F₀, is held at the end of a part."""
     mus, loads = np.array([0.5, 0.05]), np.array([1.5, 0.5])
     rec = inject_lanes(ROD, mus, loads * F0, SPEED, 1.0, n=N, n_save=51, chunks=5, damping=DAMPING)
+    assert capsys.readouterr() == ("", "")  # silent unless asked for progress
     assert rec["f_in"].shape == rec["push"].shape == (2, 51) and rec["u"].shape == (2, 51, N + 1)
     assert rec["theta"].shape == rec["wall_force"].shape == (2, 51, N + 1) and rec["t"].shape == (51,)
     np.testing.assert_allclose(rec["t"], np.linspace(0.0, 1.0, 51), atol=1e-12)
@@ -389,7 +390,9 @@ def test_each_lane_is_its_own_injection_at_the_soft_string_force_of_its_mu_and_f
     np.testing.assert_allclose(advance, rec["push"][:, -1], rtol=2e-3)
 
     swapped = inject_lanes(ROD, mus[::-1], np.array([0.5, 4.0]) * F0, SPEED, 1.0, n=N, n_save=51, chunks=5,
-                           cap=3.0, damping=DAMPING)
+                           cap=3.0, damping=DAMPING, progress=True)
+    lines = capsys.readouterr().out.splitlines()  # asked for: one line per part, the time run so far
+    assert lines == [f"  {0.2 * k:.4g} s of 1 s run" for k in range(1, 6)]
     np.testing.assert_allclose(swapped["f_in"][0], rec["f_in"][1], atol=1e-9)
     np.testing.assert_allclose(swapped["u"][0], rec["u"][1], atol=1e-12)
     assert math.isinf(swapped["held_from"][0])
