@@ -687,3 +687,21 @@ def test_e5_at_the_default_resolution_takes_each_perturbations_own_node_count(tm
         size = Scene(rod0, s["max_dF"], make_perturbation(kind, amp), "field").size()
         assert res[kind]["n"] == size and ns.count((kind, size)) == 2
     assert res["random-velocity"]["n"] != res["random-position"]["n"]  # 499 (the noise grid) and the sine default
+
+
+def test_e1_speed_runs_the_field_model_at_the_resolution_of_the_committed_study(tmp_path, monkeypatch):
+    """Called as E1 calls it (no `n_field`), the speed study runs the field model at the resolution
+    that made the committed E1 numbers (results/paper/results.json, `e1.speed.n_field`), so
+    `jaxrod reproduce e1` remakes them."""
+    import json
+    import pathlib
+
+    from jaxrod.experiments import e1_speed as mod
+
+    committed = json.loads((pathlib.Path(__file__).parents[1] / "results/paper/results.json").read_text())
+    seen = set()
+    monkeypatch.setattr(mod, "field_ramp_force", lambda rod, speed, v0s, n: seen.add(n) or np.full(len(v0s), 3.0))
+    monkeypatch.setattr(mod, "e1_curves", lambda mu, v0s, n, speed, t1, n_save: dict(
+        critical_force=np.full(len(v0s), 2.5), peaked=np.ones(len(v0s), bool)))
+    res = mod.e1_speed(str(tmp_path), quick=True, progress=False, known={})
+    assert seen == {committed["e1"]["speed"]["n_field"]} and res["n_field"] == committed["e1"]["speed"]["n_field"]

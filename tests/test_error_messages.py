@@ -169,6 +169,15 @@ def test_models_reject_each_bad_argument_naming_it_its_value_and_range(call, exp
     _raises_exactly(ValueError, call, expected)
 
 
+@pytest.mark.parametrize("make, size, smallest", [
+    (lambda k: FieldModel.from_rod(_rod(), k, dF=0.0), lambda m: m.n_nodes, 4),
+    (lambda k: GalerkinModel.from_rod(_rod(), k, dF=0.0), lambda m: m.n_modes, 1),
+], ids=["field-nodes", "galerkin-modes"])
+def test_models_accept_the_smallest_size_their_range_allows(make, size, smallest):
+    """The edge of each range the messages above state is inside it: 4 nodes, 1 mode."""
+    assert size(make(smallest)) == smallest
+
+
 def test_models_without_sample_points_or_scene_say_which_and_why():
     single = SingleMode(k=1.0, f_s=1.0, f_d=1.0)
     _raises_exactly(TypeError, single.sample_points,
