@@ -92,6 +92,13 @@ def test_3d_rod_runs_leapfrog_under_a_perturbation_not_measured_for_its_implicit
     assert Rod3D.scheme_under(SineVelocity(0.01)) is None  # implicit_3d: its own implicit default
     assert not RandomForce.implicit_3d
     assert Rod3D.scheme_under(RandomForce.from_settings(1.0, 6, jax.random.key(0), 1e-3)) == "leapfrog"
+    # and its scene steps at that scheme's default step (half the explicit limit), not the implicit one
+    from jaxrod.integrators import default_step
+
+    force = RandomForce.from_settings(1.0, 6, jax.random.key(0), 1e-3)
+    scene = jr.Scene(ROD, 5.0, force, kind="rod3d", n=60)
+    explicit, implicit = default_step(scene.model(), scheme="leapfrog"), default_step(scene.model())
+    assert scene.step() == explicit < 0.5 * implicit
 
 
 def test_a_model_without_nodes_is_budgeted_as_one_node():

@@ -467,13 +467,15 @@ def test_sweep_rejects_bad_scheduling_settings_naming_them(kw, expected):
     _raises_exactly(ValueError, lambda: sweep(spec, {"dF": 1.0}, **kw), expected)
 
 
-def test_sweep_rejects_a_step_above_the_members_limit_naming_the_limit():
-    spec = SweepSpec(model="field", n=8, dt=1.0)
+@pytest.mark.parametrize("dt", [1.0, 0.0, -1e-4])
+def test_sweep_rejects_a_step_outside_zero_to_the_members_limit_naming_the_limit(dt):
+    """Above the limit, and 0 or below (a step of 0 is not "the default step": that is `None`)."""
+    spec = SweepSpec(model="field", n=8, dt=dt)
     rod = _rod()
     m = FieldModel.from_rod(rod, 8, dF=5.0)
     limit = float(ProjectedVerlet(1.0).step_limit(m))
     _raises_exactly(ValueError, lambda: sweep(spec, {"dF": 5.0}),
-                    f"SweepSpec.dt = 1.0 s is invalid for model 'field': the scheme's step limit is {limit:.4g} s; "
+                    f"SweepSpec.dt = {dt!r} s is invalid for model 'field': the scheme's step limit is {limit:.4g} s; "
                     f"use 0 < dt < {limit:.4g} s.")
 
 
