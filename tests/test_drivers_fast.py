@@ -440,6 +440,7 @@ def test_convergence_tabulates_each_search_and_the_modes_past_it(tmp_path, monke
 
     def modes_at(kind, amp, mus, dFs, n, R, seed):
         runs.append((kind, n, seed))
+        assert amp == conv.AMPLITUDES[kind]  # the runs at 1.05 ΔF* have the searches' amplitude
         np.testing.assert_allclose(dFs, roots(kind, n) * 1.05, rtol=1e-15)
         return np.array([[n // 2, 7], [6, 8]]), np.array([[True, True], [False, True]])
 

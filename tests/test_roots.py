@@ -143,6 +143,10 @@ def test_a_confirmed_departure_root_lies_in_a_label_bracket():
     held = bd.departure_secant(ev, 0.5, 4.0, 1e3, confirm=True, **kw)
     lo, hi, root = float(held.lo), float(held.hi), float(held.root)
     assert int(held.result) == 0 and lo <= 1.0 < hi and hi - lo <= 1e-2 * hi and lo <= root <= hi
+    # the same with an absolute tolerance instead (as the load search on log ΔF asks): width ≤ atol
+    held = bd.departure_secant(ev, 0.5, 4.0, 1e3, confirm=True, start=1.03, rtol=0.0, atol=1e-2, max_iter=40)
+    lo, hi, root = float(held.lo), float(held.hi), float(held.root)
+    assert int(held.result) == 0 and lo <= 1.0 < hi and hi - lo <= 1e-2 and lo <= root <= hi
 
 
 def test_a_failed_run_ends_a_search_instead_of_counting_as_stable():
