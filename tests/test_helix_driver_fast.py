@@ -18,6 +18,7 @@ from jaxrod.experiments import helix
 from jaxrod.experiments import rod3d as rod3d_driver
 from jaxrod.experiments.helix import helix_measures, load_path, post_buckling
 from jaxrod.integrators.base import save_grid
+from jaxrod.rod3d import Rod3D
 
 
 class _Run:
@@ -52,8 +53,8 @@ def stitched(monkeypatch):
     fake = _Run(8)
     steps = []
     monkeypatch.setattr(rod3d_driver, "run", fake)
-    monkeypatch.setattr(helix, "default_step", lambda model, q: steps.append(q) or 1e-3)
-    p = load_path(jr.RodChannel.reference(0.0), 8, STAGES, sps=10.0, damping=7.0, progress=False)
+    monkeypatch.setattr(helix, "default_step", lambda model, q, scheme: steps.append((model, q, scheme)) or 1e-3)
+    p = load_path(jr.RodChannel.reference(0.0), 8, STAGES, sps=10.0, damping=7.0, progress=False, scheme="leapfrog")
     return p, fake, steps
 
 
@@ -67,8 +68,16 @@ def test_load_path_runs_each_stage_from_the_previous_ones_final_state(stitched):
         assert call["dt"] == 1e-3 and call["stop_on_buckle"] is False and call["save_state"] is True
         if k:
             assert call["q0"] == ("q after stage", k - 1) and call["v0"] == ("v after stage", k - 1)
-    # the default step is asked for at each stage's starting configuration
-    assert steps[1] == ("q after stage", 0) and steps[2] == ("q after stage", 1)
+    # the default step is asked of each stage's rod, at its starting configuration, for the scheme run
+    assert [m is c["model"] for (m, _, _), c in zip(steps, fake.calls)] == [True] * 3
+    assert steps[1][1] == ("q after stage", 0) and steps[2][1] == ("q after stage", 1)
+    assert {sc for _, _, sc in steps} == {"leapfrog"} and {c["scheme"] for c in fake.calls} == {"leapfrog"}
+    # the first stage starts from the straight rod on the wall with the mode-6 imperfection of 0.5 mm
+    s = np.arange(9) / 8
+    unloaded = Rod3D(jr.RodChannel.reference(0.0), 8, control="displacement", damping=7.0)
+    start = unloaded.initial_state(0.0, lateral_offset=0.5e-3 * np.sin(6 * np.pi * s))
+    np.testing.assert_array_equal(np.asarray(fake.calls[0]["q0"].x), np.asarray(start[0].x))
+    np.testing.assert_array_equal(np.asarray(fake.calls[0]["v0"].v), np.asarray(start[1].v))
     np.testing.assert_array_equal(p["dt"], [save_grid(d, round(d * 10.0) + 1, 1e-3)[1] for _, d in STAGES])
 
 
@@ -97,7 +106,7 @@ def test_load_path_stitches_time_displacement_and_energy_accounts(stitched):
 def test_load_path_uses_a_given_step_and_stops_on_a_non_finite_stage(monkeypatch):
     fake = _Run(6)
     monkeypatch.setattr(rod3d_driver, "run", fake)
-    monkeypatch.setattr(helix, "default_step", lambda model, q: pytest.fail("a given dt must be used"))
+    monkeypatch.setattr(helix, "default_step", lambda model, q, scheme: pytest.fail("a given dt must be used"))
     load_path(jr.RodChannel.reference(0.3), 6, [(1e-3, 0.2)], sps=20.0, dt=2e-4, scheme="verlet", progress=False)
     assert fake.calls[0]["dt"] == 2e-4 and fake.calls[0]["scheme"] == "verlet"
     monkeypatch.setattr(rod3d_driver, "run", _Run(6, result=3))

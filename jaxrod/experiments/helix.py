@@ -80,7 +80,7 @@ def load_path(rod: RodChannel, n: int, stages, *, damping: float = 50.0, offset:
         n_save = max(2, int(round(duration * sps)) + 1)
         if progress:
             print(f"  stage {k}: speed {speed * 1e3:+g} mm/s for {duration:g} s ({n} segments)", flush=True)
-        h = default_step(model, state[0]) if dt is None else dt
+        h = default_step(model, state[0], scheme=scheme) if dt is None else dt
         sol = run(model, *state, duration, n_save, h, stop_on_buckle=False, save_state=True, scheme=scheme)
         if int(sol.result) != 0:
             raise FloatingPointError(f"stage {k} of the load path became non-finite (result {int(sol.result)}).")
