@@ -520,3 +520,15 @@ def test_load_reads_a_folder_in_its_documented_layout(tmp_path, monkeypatch):
     np.testing.assert_array_equal(res.outputs["result"], [0, 0, -1, -1, 4])
     np.testing.assert_array_equal(res.outputs["buckled"], [True, False, False, False, False])
     assert np.all(np.isinf(res.outputs["t_buckle"]))
+
+
+def test_a_sweep_of_whole_numbers_is_the_sweep_of_the_same_floats():
+    """Inputs given as Python or NumPy integers (ΔF = 1, 2 N) are physical numbers: the result
+    records them as floats and every member is the run of the float input."""
+    spec = SweepSpec(model="mode", t1=0.01, dt=1e-4)
+    ints = sweep(spec, {"dF": [1, 2], "amplitude": 0.01}, progress=False)
+    floats = sweep(spec, {"dF": [1.0, 2.0], "amplitude": 0.01}, progress=False)
+    assert ints.inputs["dF"].dtype == floats.inputs["dF"].dtype == np.float64
+    np.testing.assert_array_equal(ints.inputs["dF"], [1.0, 2.0])
+    for k in floats.outputs:
+        np.testing.assert_array_equal(ints.outputs[k], floats.outputs[k])
