@@ -142,6 +142,7 @@ def test_lock_up_is_told_by_the_far_end_and_the_entry_force():
     assert not locked(sliding) and locked(stalled)
     assert locked(dict(sliding, f_in=np.where(push > 0.1, 60.0, 4.0)))  # past ℓ/r = 50 F₀
     assert not locked(dict(sliding, f_in=np.where(push > 0.1, 60.0, 4.0)), cap=100.0)
+    assert not locked(dict(sliding, f_in=np.where(push > 0.1, 50.0, 4.0)))  # reaching ℓ/r is not passing it
     assert locked(dict(sliding, f_in=np.where(push > 0.2, np.nan, np.where(push > 0.1, 60.0, 4.0)))) is True
     assert locked(dict(sliding, f_in=np.where(push > 0.1, np.nan, 4.0))) is None
     assert locked(dict(stalled, f_in=np.where(push > 0.1, np.nan, 4.0))) is None
