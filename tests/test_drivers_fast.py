@@ -706,3 +706,13 @@ def test_e1_speed_runs_the_field_model_at_the_resolution_of_the_committed_study(
         critical_force=np.full(len(v0s), 2.5), peaked=np.ones(len(v0s), bool)))
     res = mod.e1_speed(str(tmp_path), quick=True, progress=False, known={})
     assert seen == {committed["e1"]["speed"]["n_field"]} and res["n_field"] == committed["e1"]["speed"]["n_field"]
+
+
+@pytest.mark.parametrize("m_max, nodes", [(31.9, 128), (32.5, 384)])
+def test_the_field_models_default_nodes_change_past_32_unstable_modes(m_max, nodes):
+    """128 nodes while at most 32 modes are unstable (m_max = (L/π)√(F/EI) ≤ 32), 384 beyond."""
+    from jaxrod.models.field import default_nodes
+
+    rod = jr.RodChannel.reference(0.3)
+    F = float(rod.EI) * (m_max * math.pi / float(rod.L)) ** 2
+    assert default_nodes(rod, F) == nodes

@@ -193,11 +193,13 @@ def test_e6_checks_rolling_at_each_setting_with_loads_to_check(tmp_path, monkeyp
     field model calls stuck, friction at the surface and at the axis) and records what it returns."""
     monkeypatch.setattr(jaxrod.boundary, "critical_load", lambda rod, amplitude, **kw: (_Root(20.0), None))
     monkeypatch.setattr(exp3d, "e6_full", lambda out, quick, progress: {})
-    monkeypatch.setattr(exp3d, "crosscheck_critical_velocity", lambda dFs, n, progress, friction_at="surface": {})
+    monkeypatch.setattr(exp3d, "crosscheck_critical_velocity",
+                        lambda dFs, n, progress, friction_at="surface": {"progress": progress})
     monkeypatch.setitem(exp3d.SIZES, "tiny", {**exp3d.SIZES["tiny"], "dFs": (5.0, 10.0), "n_cross": 8})
     monkeypatch.setattr(exp3d, "rolling_check", lambda dF, n: {"dF": dF, "n": n})
-    res = e6m.e6(str(tmp_path), "tiny", False)
+    res = e6m.e6(str(tmp_path), "tiny", True)
     assert res["rolling_check"] == {"dF": 20.0, "n": 8}
+    assert res["crosscheck_critical_velocity"] == {"progress": True}  # the 3D cross-check reports as it goes
 
 
 def test_e6_takes_the_spectrum_before_at_the_first_save_the_perturbation_has_moved(e6_tiny):

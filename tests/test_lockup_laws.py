@@ -37,6 +37,10 @@ def test_a_helix_built_from_the_laws_reads_one_on_every_law():
     assert got["soft_string_ratio"] == pytest.approx(1.0, abs=0.03)
     assert got["soft_string_ratio_whole"] == pytest.approx(1.0, abs=0.01)
     assert got["reversals"] == 0 and got["wall_ratio_winding"] == pytest.approx(1.0, abs=0.03)
+    # the profile it read, at the nodes: arc length, the wall force as given, the axial force averaged to them
+    np.testing.assert_allclose(got["s"], np.arange(theta.size) * l0, rtol=1e-12)
+    np.testing.assert_array_equal(got["N"], N)
+    np.testing.assert_allclose(got["F"][1:-1], 0.5 * (Fseg[1:] + Fseg[:-1]), rtol=1e-12)
 
 
 def test_a_helix_that_changes_hand_is_counted():

@@ -86,3 +86,13 @@ def test_the_step_it_gives_is_stable_and_a_larger_one_is_not():
     print(f"energy growth at 0.98 of the bound's limit {stable:.3g}, at 1.05 of the measured limit {unstable:.3g}")
     assert stable < 2.0
     assert unstable > 1e3
+
+
+def test_the_models_highest_frequency_is_the_bound_at_the_state_it_is_given():
+    """`Rod3D.max_frequency(q)` is `frequency_bound` at `q`: pressed 1 mm into the wall (the Hertz
+    contact stiffer than at the straight state's sag) it is higher than at the default state."""
+    model, q0 = _case(12, "channel, compressed")
+    pressed = eqx.tree_at(lambda q: q.x, q0, q0.x.at[:, 2].add(-1e-3))
+    assert float(model.max_frequency(pressed)) == float(frequency_bound(model, pressed))
+    assert float(model.max_frequency(pressed)) > 1.002 * float(model.max_frequency())  # 0.5 %: shear dominates
+    assert float(model.max_frequency()) == float(frequency_bound(model))
