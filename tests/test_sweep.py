@@ -532,3 +532,12 @@ def test_a_sweep_of_whole_numbers_is_the_sweep_of_the_same_floats():
     np.testing.assert_array_equal(ints.inputs["dF"], [1.0, 2.0])
     for k in floats.outputs:
         np.testing.assert_array_equal(ints.outputs[k], floats.outputs[k])
+
+
+def test_a_sweeps_progress_bar_names_the_sweep_and_counts_members(capfd):
+    """Asked for progress, a sweep shows one bar on stderr: "sweep", its members done out of all,
+    and the members per second of this call."""
+    sweep(SweepSpec(model="mode", t1=0.01, dt=1e-4), {"dF": [1.0, 2.0, 3.0]}, progress=True)
+    err = capfd.readouterr().err
+    last = err.replace("\r", "\n").strip().splitlines()[-1]
+    assert last.startswith("sweep: 100%") and "3/3" in last and "members/s" in last
