@@ -417,6 +417,8 @@ def test_atan_ratio_and_the_slip_phase_duration_by_hand():
         assert float(_phase_duration(jnp.asarray(v), jnp.asarray(g), jnp.asarray(k))) == pytest.approx(
             math.atanh(v * s_ / g) / s_, rel=1e-12)
     assert math.isinf(float(_phase_duration(jnp.asarray(2.0), jnp.asarray(0.8), jnp.asarray(-1.0))))  # v s > g
+    # at the edge of T's domain, y = −1 (v s = g, reached by rounding), atanh is taken just below 1: finite
+    assert float(_atan_ratio(jnp.asarray(-1.0))) == pytest.approx(math.atanh(1.0 - 2.0**-53), rel=1e-12)
 
 
 def test_galerkin_energy_terms_are_the_field_integrals():
