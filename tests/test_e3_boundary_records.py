@@ -123,3 +123,15 @@ def test_e3_searches_the_settings_loads_and_writes_the_boundary_under_its_scheme
     assert got == dict(n=9, loads=list(S["loads"]), exponent_rod3d=-0.48, exponent_rod3d_stderr=0.02,
                        exponent_field=-0.51, exponent_field_stderr=0.01, exponent_paper=e3.PAPER_E3_EXPONENT,
                        runs=[5, 7], converged=1)
+
+
+def test_boundary_3d_reports_each_load_with_its_3d_and_field_values(tmp_path, synthetic, capsys):
+    """With progress, one line per run and one per load: the 3D value (the bracket's geometric mean),
+    the field model's, and how far the first is from the second, in per cent."""
+    res = e3.boundary_3d([10.0], n=8, rtol=0.02, runs_csv=str(tmp_path / "runs.csv"), dt=1e-5, progress=True)
+    p = res["points"][0]
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == p["runs"] + 1 and all(line.startswith("  ΔF = 10 N, v0 = ") for line in lines[:-1])
+    assert lines[-1] == (f"ΔF = 10 N: 3D {1e3 * p['rod3d']:.3f} mm/s, field {1e3 * p['field']:.3f} mm/s "
+                         f"({100 * (p['rod3d'] / p['field'] - 1):+.1f} %)")
+    assert -3.0 < 100 * (p["rod3d"] / p["field"] - 1) < -1.0  # the field's guess is 3 % above the true boundary
