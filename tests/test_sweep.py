@@ -541,3 +541,15 @@ def test_a_sweeps_progress_bar_names_the_sweep_and_counts_members(capfd):
     err = capfd.readouterr().err
     last = err.replace("\r", "\n").strip().splitlines()[-1]
     assert last.startswith("sweep: 100%") and "3/3" in last and "members/s" in last
+
+
+def test_a_finished_sweep_is_recognised_whatever_order_its_rod_overrides_were_written_in(tmp_path):
+    """The rod overrides are a mapping: `{"L": 3, "R": 0.006}` and `{"R": 0.006, "L": 3}` are one
+    sweep, so a sweep written with one is found finished by the other (no member runs again)."""
+    path = str(tmp_path / "run")
+    kw = dict(seed=0, chunk_size=2, path=path, progress=False)
+    spec = lambda rod: SweepSpec(model="mode", t1=0.01, dt=1e-4, rod=rod)  # noqa: E731
+    sweep(spec({"L": 3.0, "R": 0.006}), {"dF": [1.0, 2.0]}, **kw)
+    computed = []
+    again = sweep(spec({"R": 0.006, "L": 3.0}), {"dF": [1.0, 2.0]}, on_chunk=computed.append, **kw)
+    assert computed == [] and again.shape == (2,)
