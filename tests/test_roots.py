@@ -229,3 +229,15 @@ def test_the_point_searches_take_the_horizon_of_the_curves_by_default(monkeypatc
     bd.critical_load(ROD, 0.02)
     curves = {inspect.signature(f).parameters["t1"].default for f in (bd.boundary_curve, bd.critical_load_curve)}
     assert len(curves) == 1 and seen == [curves.pop()] * 2
+
+
+@pytest.mark.parametrize("finder", ["newton", "bisection"])
+def test_a_bracket_of_whole_numbers_is_searched_as_floats(finder):
+    """lo = 0, hi = 4 given as ints: the search runs in the default float dtype and finds x³ = 2."""
+    g = lambda x: x**3 - 2.0  # noqa: E731
+    if finder == "newton":
+        r = bd.safeguarded_newton(g, 0, 4, rtol=1e-12)
+    else:
+        r = bd.bisection(lambda x: jnp.where(g(x) > 0, 1.0, 0.0), 1, 4, rtol=1e-12)
+    assert r.root.dtype == r.lo.dtype == jnp.result_type(float)
+    assert int(r.result) == bd.ROOT_RESULTS.converged and float(r.root) == pytest.approx(2 ** (1 / 3), rel=1e-9)
