@@ -202,3 +202,12 @@ def test_galerkin_friction_acceleration_is_the_projected_sliding_friction():
     got = np.asarray(m.friction_acceleration(jr.Coulomb(), jnp.zeros(6).at[0].set(1.0), 0.0))
     want = [4 * f_d / (mm * np.pi) if mm % 2 else 0.0 for mm in range(1, 7)]
     np.testing.assert_allclose(got, want, rtol=2e-3, atol=2e-3 * f_d)
+
+
+def test_the_documented_defaults_of_the_3d_rod_and_the_galerkin_model():
+    """`Rod3D`'s wall is elastic unless asked (contact damping 0: energy conserved at μ = 0);
+    the Galerkin model integrates its friction on max(64, 8·n_modes) midpoints."""
+    from jaxrod.models.galerkin import GalerkinModel
+
+    assert float(Rod3D(ROD, 4).contact_damping) == 0.0
+    assert [GalerkinModel.from_rod(ROD, k, dF=1.0).n_quad for k in (1, 8, 9, 20)] == [64, 64, 72, 160]
