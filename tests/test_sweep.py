@@ -540,7 +540,7 @@ def test_a_sweeps_progress_bar_names_the_sweep_and_counts_members(capfd):
     sweep(SweepSpec(model="mode", t1=0.01, dt=1e-4), {"dF": [1.0, 2.0, 3.0]}, progress=True)
     err = capfd.readouterr().err
     last = err.replace("\r", "\n").strip().splitlines()[-1]
-    assert last.startswith("sweep: 100%") and "3/3" in last and "members/s" in last
+    assert last.startswith("sweep: 100%") and "3/3" in last and last.endswith(" members/s]")
 
 
 def test_a_finished_sweep_is_recognised_whatever_order_its_rod_overrides_were_written_in(tmp_path):
