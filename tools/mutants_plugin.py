@@ -12,7 +12,7 @@
   copy with no mutant active is appended to PATH and reported as skipped, so the stats run
   (`pytest -x`) goes on; the held-out runner leaves such tests out.
 - During mutmut's stats run (`MUTANT_UNDER_TEST=stats`), the functions a fixture of wider scope
-  (module, class, package, session) calls while it is set up are credited to every test that
+  (module, class, package, the whole run) calls while it is set up are credited to every test that
   requests the fixture, not only to the first (mutmut credits what runs to the test running, and
   a module-scoped fixture runs once, inside the first test's setup).
 """
