@@ -226,5 +226,5 @@ def test_e6_takes_the_spectrum_before_at_the_first_save_the_perturbation_has_mov
         assert r["energy_balance_error"] == pytest.approx(float(sol.energy_balance_error()), rel=1e-9, abs=1e-15)
         assert not np.any(q[:first] != 0) and np.any(q[first] != 0)
         want = np.asarray(modal_spectrum(q[first], 24))
-        got = [float(r["power_before"]) for r in rows if r["case"] == label]
+        got = [float(row["power_before"]) for row in rows if row["case"] == label]
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-15)

@@ -233,7 +233,8 @@ def test_the_point_searches_take_the_horizon_of_the_curves_by_default(monkeypatc
 
 @pytest.mark.parametrize("finder", ["newton", "bisection"])
 def test_a_bracket_of_whole_numbers_is_searched_as_floats(finder):
-    """lo = 0, hi = 4 given as ints: the search runs in the default float dtype and finds x³ = 2."""
+    """A bracket given as ints (Newton [0, 4], bisection [1, 4]): the search runs in the default float
+    dtype and finds x³ = 2."""
     g = lambda x: x**3 - 2.0  # noqa: E731
     if finder == "newton":
         r = bd.safeguarded_newton(g, 0, 4, rtol=1e-12)

@@ -446,8 +446,6 @@ def test_galerkin_energy_terms_are_the_field_integrals():
     assert float(m.kinetic_energy(jnp.asarray(v))) == pytest.approx(expected["kinetic"], rel=1e-6)
 
 
-
-
 @pytest.mark.parametrize("z", [9e-4, -9e-4])
 def test_the_stumpff_series_below_the_switch_is_the_closed_form_to_rounding(z):
     """c₀ = cos√z, c₁ = sin√z/√z, c₂ = 2 sin²(√z/2)/z (cosh, sinh for z < 0): below |z| = 1e-3 the
