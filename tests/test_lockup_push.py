@@ -62,6 +62,53 @@ def test_extents_tell_a_helix_from_a_sinusoid():
     np.testing.assert_array_equal(sin2, [[sin[0], 0.0], [0.0, sin[0]]])
 
 
+
+def test_extents_unwrap_theta_along_the_rod_so_a_sinusoid_on_the_top_is_not_a_helix():
+    """A sinusoid of 0.6 rad about θ = π (the rod on the channel's top, where the wrapped angle
+    jumps between π and −π) is sinusoidal along its whole 10 m, not helical: θ is unwrapped
+    along the rod, the last axis, for one save and for the lanes' (lanes, saves, nodes)."""
+    s = np.linspace(0.0, 10.0, 401)
+    theta = np.angle(np.exp(1j * (np.pi + 0.6 * np.sin(2 * np.pi * s))))
+    assert np.ptp(theta) > 6.0  # wrapped: it jumps
+    hel, sin = extents(theta[None], s, 1.0)
+    assert hel[0] == 0.0 and sin[0] == pytest.approx(10.0 + (s[1] - s[0]))
+    lanes = np.stack([np.stack([theta, theta])] * 3)
+    hel3, sin3 = extents(lanes, s, 1.0)
+    np.testing.assert_array_equal(hel3, np.zeros((3, 2)))
+    np.testing.assert_array_equal(sin3, np.full((3, 2), sin[0]))
+
+
+def test_inject_lanes_runs_its_parts_and_keeps_n_save_saves_in_all(monkeypatch):
+    """The vmapped injection runs `chunks` parts (20 by default) of `duration`/`chunks` each, with
+    saves per part such that the record holds `n_save` saves, also when a part gets only its two
+    ends (n_save − 1 = chunks); the parts after the first come from the hold rule (`adjust`).
+    (`_phases` replaced by a recorder: what is checked is what inject_lanes asks of it.)"""
+    from jaxrod.lockup import push as P
+
+    seen = {}
+
+    def phases(rod, parts, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme="leapfrog"):
+        seen.update(parts=parts, per=n_save, lanes=lanes, adjust=adjust, scheme=scheme, q=q)
+        saves = 1 + len(parts) * (n_save - 1)
+        m = np.asarray(q.x).shape[0]
+        return dict(t=np.linspace(0.0, 1.0, saves), phase=np.ones(saves, int),
+                    reaction=np.zeros((m, saves, 2)), F0=1.0)
+
+    monkeypatch.setattr(P, "_phases", phases)
+    rod = push_rod(1.0, 0.02, 0.5)
+    for chunks, n_save in ((None, 101), (20, 21), (4, 5), (3, 50)):
+        kw = {} if chunks is None else {"chunks": chunks}
+        rec = P.inject_lanes(rod, [0.5, 0.3, 0.2], [0.0, 1.0, 2.0], 0.01, 2.0, n=12, n_save=n_save, **kw)
+        parts = 20 if chunks is None else chunks
+        assert len(seen["parts"]) == parts and all(d == pytest.approx(2.0 / parts) for _, d in seen["parts"])
+        assert 1 + parts * (seen["per"] - 1) >= n_save and seen["per"] >= 2
+        if (n_save - 1) % parts == 0:
+            assert len(rec["t"]) == n_save
+        assert seen["lanes"] and seen["adjust"] is not None and seen["scheme"] == "implicit"
+        assert np.asarray(seen["q"].x).shape[0] == 3 and np.all(rec["phase"] == 0)
+        assert rec["F_far"].shape == (3, len(rec["t"]))
+
+
 def test_a_short_rod_passes_the_pushed_force_less_the_friction_of_the_rod():
     """μL/ℓ = 0.1 (L = 0.41 m, far shorter than a buckle: it stays straight up to 3F₀): under an
     entry force rising at 15 F₀/s every interior node slides toward the far end, so the load
