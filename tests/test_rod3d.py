@@ -62,6 +62,7 @@ def test_buckling_threshold_follows_the_control():
     assert float(Rod3D(rod, 12, control="load", end_load=F0 + 5.0).buckle_threshold) == 0.5
     assert float(Rod3D(rod, 12, control="displacement", speed=1e-3).buckle_threshold) == 0.5
     assert float(Rod3D(rod, 12, control="force", preload=F0 - 1.0).buckle_threshold) == 0.5
+    assert float(Rod3D(rod, 12, control="force", preload=F0).buckle_threshold) == 0.5  # at F⁰: A_held = 0
     for dF in (1.0, 5.0, 20.0):
         model = Rod3D(rod, 12, control="force", preload=F0 + dF)
         omega6 = 6 * np.pi / float(rod.L)

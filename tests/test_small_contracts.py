@@ -224,6 +224,23 @@ def test_a_run_reports_each_save_interval_and_whether_it_has_stopped(monkeypatch
     assert ticks == host
 
 
+
+def test_a_run_shown_in_blocks_raises_only_on_failure_and_only_when_asked():
+    """With a progress bar (the run in blocks on the host) a successful run returns, `throw` or
+    not; a run from a non-finite start returns its code with `throw=False` and raises the
+    code's message with `throw=True`."""
+    s = jr.Scene(jr.RodChannel.reference(0.3), 5.0, jr.SineVelocity(0.08, 6.0), "field", n=22)
+    q0, v0 = s.initial_state()
+    opts = jr.RunOptions(save_state=False, progress=True)
+    for throw in (True, False):
+        ok = jr.simulate(s.model(), s.integrator(), q0, v0, 0.21, n_save=9, throw=throw, options=opts)
+        assert int(ok.result) == jr.RESULTS.successful
+    q_nan = jax.tree_util.tree_map(lambda a: a * jnp.nan, q0)
+    bad = jr.simulate(s.model(), s.integrator(), q_nan, v0, 0.21, n_save=9, throw=False, options=opts)
+    assert int(bad.result) == jr.RESULTS.nonfinite
+    with pytest.raises(eqx.EquinoxRuntimeError, match=r"non-finite \(NaN or inf\)"):
+        jr.simulate(s.model(), s.integrator(), q_nan, v0, 0.21, n_save=9, throw=True, options=opts)
+
 def test_the_3d_step_bound_adds_the_wall_stiffness_only_where_gravity_presses_the_rod_on_it():
     """At rest on the bottom, the Hertz wall adds stiffness through the static sag of gravity:
     without gravity (or without the channel) the bound is the free rod's, lower than with both."""
