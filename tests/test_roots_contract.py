@@ -194,3 +194,11 @@ def test_every_finder_returns_float64_roots_and_int32_codes():
     for r in results:
         assert r.root.dtype == r.lo.dtype == r.hi.dtype == jnp.float64
         assert r.evaluations.dtype == r.result.dtype == jnp.int32
+
+
+def test_departure_search_by_default_finds_the_root_to_1e_6():
+    """With its default tolerance (1e-6 relative) the search of u = 50(x − 1) from [0.5, 4]
+    with the rate bound 10³ gives x* = 1 to 1e-6 (the first run's step u/λ alone lands at
+    3.85)."""
+    r = bd.departure_secant(departure(), 0.5, 4.0, 1e3)
+    assert int(r.result) == OK and float(r.root) == pytest.approx(1.0, rel=1e-6)
