@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+import jaxrod as jr
 from jaxrod import boundary
 from jaxrod.experiments.e3 import rod3d as e3
 
@@ -54,8 +55,11 @@ def test_boundary_3d_brackets_a_known_boundary_and_fits_its_exponent(tmp_path, s
     assert res["exponent_rod3d"] == pytest.approx(-0.5, abs=0.01)
     assert res["exponent_field"] == pytest.approx(-0.5, abs=1e-9)
     assert res["exponent_theory"] == -0.5
-    assert {k: res[k] for k in ("n_segments", "mu", "ends", "friction_at", "rtol", "dt", "t1")} == dict(
-        n_segments=8, mu=0.2, ends="clamped", friction_at="surface", rtol=0.01, dt=1e-5, t1=0.4)
+    assert {k: res[k] for k in ("n_segments", "mu", "ends", "friction_at", "rtol", "dt", "t1", "scheme", "sink")} == dict(
+        n_segments=8, mu=0.2, ends="clamped", friction_at="surface", rtol=0.01, dt=1e-5, t1=0.4, scheme="implicit",
+        sink=e3.SINK)
+    # F⁰ of the rod at μ (the load the ΔF are measured from), for a reader of the file
+    assert res["F0"] == pytest.approx(float(jr.theory.reference_load(jr.RodChannel.reference(mu=0.2))), rel=1e-12)
     rows = list(csv.DictReader(open(runs)))
     assert len(rows) == len(synthetic) == sum(p["runs"] for p in res["points"])
     assert {(r["n_segments"], r["mu"], r["ends"], r["scheme"]) for r in rows} == {("8", "0.2", "clamped", "implicit")}
