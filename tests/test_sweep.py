@@ -535,9 +535,10 @@ def test_a_sweep_of_whole_numbers_is_the_sweep_of_the_same_floats():
 
 
 def test_a_sweeps_progress_bar_names_the_sweep_and_counts_members(capfd):
-    """Asked for progress, a sweep shows one bar on stderr: "sweep", its members done out of all,
-    and the members per second of this call."""
-    sweep(SweepSpec(model="mode", t1=0.01, dt=1e-4), {"dF": [1.0, 2.0, 3.0]}, progress=True)
+    """Asked for progress, a sweep shows one bar on stderr: "sweep", its members done out of all
+    (counted chunk by chunk: here a chunk of 2 and one of 1), and the members per second of this
+    call."""
+    sweep(SweepSpec(model="mode", t1=0.01, dt=1e-4), {"dF": [1.0, 2.0, 3.0]}, chunk_size=2, progress=True)
     err = capfd.readouterr().err
     last = err.replace("\r", "\n").strip().splitlines()[-1]
     assert last.startswith("sweep: 100%") and "3/3" in last and last.endswith(" members/s]")
