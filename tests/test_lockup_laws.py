@@ -67,3 +67,17 @@ def test_a_straight_rod_has_no_helix_to_compare():
     assert not got["helical"].any() and math.isnan(got["N_ratio"]) and got["inner_length"] == 0.0
     with pytest.raises(ValueError, match="theta"):
         helix_against_laws(np.zeros(n), np.full(n + 1, w), np.full(n, F0), 0.04, EI, w, r, mu, wave)
+
+
+@pytest.mark.parametrize("amplitude, winding", [(1.0, False), (2.0, True)])
+def test_a_sinusoid_is_no_helix_and_winds_only_past_half_a_turn(amplitude, winding):
+    """θ = a sin(2πs/wave), wrapped: spanning 2a within a window, less than a full turn, so no
+    node is helical and nothing is compared; it winds (θ spans more than π in a window) for
+    a = 2 rad, not for a = 1 rad."""
+    n = 400
+    l0 = 2.5 / n
+    s = np.arange(n + 1) * l0
+    theta = np.angle(np.exp(1j * amplitude * np.sin(2 * np.pi * s / wave)))
+    got = helix_against_laws(theta, np.full(n + 1, w), np.full(n, F0), l0, EI, w, r, mu, wave)
+    assert not got["helical"].any() and not got["inner"].any() and math.isnan(got["pitch_ratio"])
+    assert (got["winding_length"] > 2.0) == winding and (got["winding_length"] == 0.0) == (not winding)
