@@ -113,7 +113,7 @@ def test_registry_rejects_bad_names_and_classes_naming_them():
                     "model 'm': NotAModel is not a subclass of jaxrod.AbstractModel.")
     _raises_exactly(TypeError, lambda: registry.register_perturbation("p", NotAModel),
                     "perturbation 'p': NotAModel is not a subclass of AbstractPerturbation.")
-    _raises_exactly(ValueError, lambda: registry.model_class("nope", "SweepSpec.model"),
+    _raises_exactly(ValueError, lambda: SweepSpec(model="nope"),
                     f"SweepSpec.model = 'nope' is invalid: expected one of {registry.model_names()}.")
     _raises_exactly(ValueError, lambda: registry.perturbation_class("nope"),
                     f"perturbation = 'nope' is invalid: expected one of {registry.perturbation_names()}.")

@@ -460,3 +460,17 @@ def test_the_stumpff_series_below_the_switch_is_the_closed_form_to_rounding(z):
         ref = (math.cosh(r), math.sinh(r) / r, 2 * math.sinh(r / 2) ** 2 / abs(z))
     for g, want in zip(_stumpff(jnp.asarray(z)), ref):
         assert float(g) == pytest.approx(want, rel=1e-15, abs=0)
+
+
+def test_the_exact_solution_buckles_at_the_first_save_over_the_threshold():
+    """A growing mode (k < 0) run by `Exact` past a threshold of 0.5: `t_buckle` and `t_stop` are
+    the time of the first save whose amplitude is over it (a scalar); with a threshold it never
+    reaches, not buckled, `t_buckle` inf and `t_stop` the horizon."""
+    model = jr.SingleMode(-4.0, 0.5, 0.5)
+    sol = jr.simulate(model, jr.Exact(), 0.1, 1.0, 3.0, n_save=31, options=jr.RunOptions(buckle_threshold=0.5))
+    ts, amp = np.asarray(sol.ts), np.asarray(sol.amplitude)
+    first = int(np.flatnonzero(amp > 0.5)[0])
+    assert 0 < first < 30 and bool(sol.buckled) and np.shape(sol.t_buckle) == ()
+    assert float(sol.t_buckle) == float(sol.t_stop) == ts[first]
+    never = jr.simulate(model, jr.Exact(), 0.1, 1.0, 3.0, n_save=31, options=jr.RunOptions(buckle_threshold=1e9))
+    assert not bool(never.buckled) and float(never.t_buckle) == np.inf and float(never.t_stop) == 3.0
