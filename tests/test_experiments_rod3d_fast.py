@@ -655,6 +655,9 @@ def test_e6c_records_a_failed_search_without_its_run_and_still_runs_40_N(tmp_pat
     assert [(r["case"], r["dF"], r["search_result"], r["buckled"], r["wall_s"]) for r in rows] == [
         ("1.05 dF*", "nan", "2", "", "3.0"), ("paper's 40 N", "40.0", "2", "1", rows[1]["wall_s"])]
     assert float(rows[1]["wall_s"]) < 3.0  # the search's time is on the first row only
+    # the failed search's row keeps what it found: its bracket, runs and the field's ΔF*
+    assert [rows[0][k] for k in ("dF_star_lo", "dF_star_hi", "search_runs", "dF_star_field")] == ["1.25", "20.0", "4",
+                                                                                                   "5.0"]
     monkeypatch.setattr(e6m, "_critical_load", None)  # not searched again
     again = e6m.e6c(str(tmp_path), quick="tiny", progress=False, n=48)
     assert set(again) == {"paper's 40 N", "n"} and len(fake_scene.made) == 1

@@ -3,6 +3,7 @@ Each compiled 3D run costs 5–7 s of compilation: the Euler load, the energy co
 sharp-law gradient (several step sizes or laws each) are `slow`; `tests/test_engine.py` runs the
 3D rod through `simulate` under jit and vmap and checks its energy balance in the default suite."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -390,3 +391,20 @@ def test_amplitude_is_the_largest_wall_angle(seed):
         qc = type(q)(x, q.Q)
         expected = float(jnp.max(jnp.abs(m.theta(x)[1:-1])))
         assert float(m.amplitude(qc)) == pytest.approx(expected, rel=1e-15, abs=0)
+
+
+def test_a_rod_counts_as_stuck_only_when_its_nodes_and_spins_are_at_rest_and_held():
+    """`stop_measures`' second value: a straight rod at rest with every contact held by static
+    friction is stuck; one free segment spinning (node velocities all zero), or one contact not
+    held, is not."""
+    from jaxrod.rod3d.measures import stop_measures
+
+    model = Rod3D(jr.RodChannel.reference(0.3), 6)
+    q, v = model.initial_state()
+    v = eqx.tree_at(lambda s: s.stuck, v, jnp.ones_like(v.stuck))
+    a = jnp.zeros_like(v.v)
+    assert bool(stop_measures(model, q, v, a)[1])
+    spinning = eqx.tree_at(lambda s: s.w, v, v.w.at[2, 0].set(0.1))
+    assert not bool(stop_measures(model, q, spinning, a)[1])
+    sliding = eqx.tree_at(lambda s: s.stuck, v, v.stuck.at[3].set(False))
+    assert not bool(stop_measures(model, q, sliding, a)[1])
