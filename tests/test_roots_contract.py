@@ -129,9 +129,8 @@ def test_departure_search_reports_what_it_ran():
     the lowest buckled point run and `lo` the highest stable one (or the trusted lower end);
     `value` is u there and `derivative` the rate 50 (the secant of two buckled runs on a linear
     branch); the root is x* to rtol."""
-    ev, seen = recorded(lambda x: x)
-    f = departure()
-    r = bd.departure_secant(lambda x: f(ev(x)), 0.5, 4.0, 1e3, rtol=1e-8)
+    ev, seen = recorded(departure())
+    r = bd.departure_secant(ev, 0.5, 4.0, 1e3, rtol=1e-8)
     assert int(r.result) == OK and float(r.root) == pytest.approx(1.0, rel=1e-8)
     assert int(r.evaluations) == len(seen)
     buckled, stable = [x for x in seen if x > 1.0], [x for x in seen if x <= 1.0]
@@ -143,9 +142,8 @@ def test_departure_search_reports_what_it_ran():
 def test_departure_search_steps_up_from_a_stable_start_by_a_quarter_at_a_time():
     """Started at a stable x = 1 below the root 3 (bracket [0.5, 4]): before the first buckled
     run each step grows x by 25 % (a step to the bracket's geometric middle would be longer)."""
-    ev, seen = recorded(lambda x: x)
-    f = departure(root=3.0)
-    r = bd.departure_secant(lambda x: f(ev(x)), 0.5, 4.0, 1e3, start=1.0, rtol=1e-6)
+    ev, seen = recorded(departure(root=3.0))
+    r = bd.departure_secant(ev, 0.5, 4.0, 1e3, start=1.0, rtol=1e-6)
     assert int(r.result) == OK and float(r.root) == pytest.approx(3.0, rel=1e-6)
     first_buckled = next(i for i, x in enumerate(seen) if x > 3.0)
     assert first_buckled >= 2
@@ -179,9 +177,8 @@ def test_departure_search_started_outside_the_bracket_starts_at_its_end():
     """A start above `hi` (or below `lo`) is clipped to the bracket: its first run is at that
     end."""
     for start, end in ((9.0, 4.0), (0.1, 0.5)):
-        ev, seen = recorded(lambda x: x)
-        f = departure()
-        bd.departure_secant(lambda x: f(ev(x)), 0.5, 4.0, 1e3, start=start, rtol=1e-6)
+        ev, seen = recorded(departure())
+        bd.departure_secant(ev, 0.5, 4.0, 1e3, start=start, rtol=1e-6)
         assert seen[0] == end
 
 
