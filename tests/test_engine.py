@@ -128,3 +128,21 @@ def test_a_traced_smoothing_width_is_differentiable_through_simulate():
     h = 1e-7
     fd = (float(val(0.004 + h, eps)) - float(val(0.004 - h, eps))) / (2 * h)
     assert np.isfinite(g) and g == pytest.approx(fd, rel=1e-5)
+
+
+@pytest.mark.parametrize("kind,n", [("mode", None), ("field", 24)])
+@pytest.mark.parametrize("bad", ["q", "v"])
+@pytest.mark.parametrize("progress", [False, True])
+def test_a_run_from_a_non_finite_state_reports_nonfinite(kind, n, bad, progress):
+    """A NaN in the initial position or velocity is a failed run (`nonfinite`), with or without
+    a progress bar, even where the friction pass would hold the rod at once (it sets a NaN
+    velocity to zero, leaving a finite state that looked like a successful, stuck run)."""
+    s = Scene(ROD, 5.0, jr.SineVelocity(2e-3, 6.0), kind, n=n)
+    q0, v0 = s.initial_state()
+    nan_first = lambda x: jnp.asarray(x).reshape(-1).at[0].set(jnp.nan).reshape(jnp.shape(x))
+    q0 = nan_first(q0) if bad == "q" else q0
+    v0 = nan_first(v0) if bad == "v" else v0
+    sol = jr.simulate(s.model(), s.integrator(), q0, v0, 0.02, n_save=3, throw=False,
+                      options=jr.RunOptions(progress=progress))
+    assert int(sol.result) == jr.RESULTS.nonfinite
+    assert not bool(sol.buckled)

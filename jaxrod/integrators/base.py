@@ -205,9 +205,14 @@ class AbstractFixedStep(AbstractIntegrator):
         return float(1.0 / model.max_frequency(q))
 
     def start(self, model: AbstractModel, q0, v0, options: RunOptions) -> RunState:
-        """The [`RunState`][] at t = 0 (stuck at once if the initial state is held)."""
+        """The [`RunState`][] at t = 0 (stuck at once if the initial state is held). A
+        non-finite initial state starts as NaN everywhere, so that the run ends `nonfinite`
+        (the friction pass would otherwise set a NaN velocity to zero and hold a finite rod)."""
         dtype = jnp.result_type(float)
         q0, v0 = as_state(q0), as_state(v0)
+        finite = _all_finite((q0, v0))
+        q0, v0 = jax.tree_util.tree_map(
+            lambda x: x if x.dtype == bool else jnp.where(finite, x, jnp.nan), (q0, v0))
         t = jnp.zeros((), dtype)
         a = model.accelerations(q0, v0, t)
         stuck = model.is_stuck(q0, v0, a, t)
