@@ -35,6 +35,21 @@ def test_so3_roundtrip_and_finite_gradients_at_identity():
     np.testing.assert_allclose(g, 2 * phi, atol=1e-9)
 
 
+def test_components_pack_along_the_last_axis_for_any_leading_shape():
+    """`pack` puts three component arrays of any shape (…) on a last axis of 3 and `unpack`
+    takes it apart again: per node, per lane and node (2 × 5), and a single vector."""
+    from jaxrod.rod3d import components as c3
+
+    for shape in [(5,), (2, 5), ()]:
+        xyz = tuple(jnp.asarray(np.arange(np.prod(shape, dtype=int), dtype=float).reshape(shape) + 10.0 * k)
+                    for k in range(3))
+        v = c3.pack(xyz)
+        assert v.shape == (*shape, 3)
+        for k in range(3):
+            np.testing.assert_array_equal(v[..., k], xyz[k])
+            np.testing.assert_array_equal(c3.unpack(v)[k], xyz[k])
+
+
 @pytest.mark.parametrize("theta", [0.0, 1e-9, 1e-4, 0.05, 0.7, 1.3, 2.2, 3.0])
 def test_log_rotation_and_its_jacobian_against_the_library_arctangent(theta):
     """The step's logarithm (half-angle form, `components.log_rotation`) against `log_so3`
