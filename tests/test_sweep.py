@@ -554,3 +554,16 @@ def test_a_finished_sweep_is_recognised_whatever_order_its_rod_overrides_were_wr
     computed = []
     again = sweep(spec({"R": 0.006, "L": 3.0}), {"dF": [1.0, 2.0]}, on_chunk=computed.append, **kw)
     assert computed == [] and again.shape == (2,)
+
+
+def test_a_sweep_over_loads_takes_its_step_from_the_largest_load():
+    """A sweep's members share one step: that of the largest swept ΔF (the stiffest member: a
+    Galerkin rod's step at 40 N is a third of its step at 1 N), whatever the spec's own ΔF; the
+    member at 40 N runs stably at it."""
+    spec = SweepSpec(model="galerkin", t1=0.01)
+    res = sweep(spec, {"dF": [1.0, 40.0], "amplitude": 0.01}, progress=False)
+    rod = jr.RodChannel.reference(spec.mu)
+    steps = {dF: jr.Scene(rod, dF, kind="galerkin", n=res.meta["n"]).step() for dF in (1.0, spec.dF, 40.0)}
+    assert steps[40.0] < 0.5 * min(steps[1.0], steps[spec.dF])
+    assert res.meta["dt"] == pytest.approx(steps[40.0], rel=1e-12)
+    np.testing.assert_array_equal(res.outputs["result"], [0, 0])
