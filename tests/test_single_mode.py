@@ -251,6 +251,17 @@ def test_tanh_tends_to_the_sharp_law_on_short_horizons():
     assert errs[2, 0] < 5e-3
 
 
+def test_a_smooth_run_out_of_steps_reports_max_steps():
+    """`DiffraxSmooth(max_steps=…)` caps the adaptive solver: a run that needs more steps ends
+    with the result `max_steps` (and `simulate(throw=True)` raises), not `successful`."""
+    model = jr.SingleMode(25.0, 2.0, 2.0)
+    capped = jr.DiffraxSmooth(jr.Tanh(1e-2), rtol=1e-9, atol=1e-11, max_steps=8)
+    sol = jr.simulate(model, capped, 1.0, 0.0, 1.0, n_save=3, throw=False)
+    assert int(sol.result) == jr.RESULTS.max_steps
+    with pytest.raises(Exception, match="maximum number of steps"):
+        jr.simulate(model, capped, 1.0, 0.0, 1.0, n_save=3)
+
+
 # -- The friction laws' updates on values worked out by hand (eager, no compilation) ----------
 
 def test_coulomb_update_by_hand_static_then_dynamic_bound():
