@@ -113,7 +113,8 @@ def test_critical_load_of_another_mode_is_its_p7():
 
 
 def test_a_traced_load_without_n_and_dt_is_refused_by_name():
-    with pytest.raises(ValueError, match=r"^pass n and dt explicitly when the rod or the load is traced"):
+    with pytest.raises(ValueError, match=r"^pass n and dt explicitly when the rod or the load is traced \(e\.g\. "
+                                         r"under vmap\): they are static settings\."):
         jax.vmap(lambda dF: bd.critical_velocity(ROD, dF, model="field", sensitivities=())[0].root)(jnp.array([2.0, 4.0]))
 
 
