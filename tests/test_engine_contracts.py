@@ -141,6 +141,22 @@ def test_critical_load_curve_member_is_the_search_with_its_documented_key():
     assert float(curve.root[1, 0]) != pytest.approx(float(curve.root[1, 1]), rel=1e-6)  # the keys differ
 
 
+def test_critical_load_curve_searches_the_rod_with_its_overrides():
+    """`rod_overrides` change the rod of every point (here a channel of half the clearance):
+    each point is `critical_load` on `RodChannel.reference(mu, **rod_overrides)`, not on the
+    reference rod (single mode, exact: no resolution to share)."""
+    from jaxrod import boundary as bd
+
+    kw = dict(model="mode", rtol=1e-9, bracket=(1e-3, 400.0), sensitivities=())
+    R = 0.5 * float(ROD.R)
+    curve, _ = bd.critical_load_curve([0.2, 0.4], 0.02, rod_overrides={"R": R}, **kw)
+    for i, mu in enumerate((0.2, 0.4)):
+        narrow, _ = bd.critical_load(jr.RodChannel.reference(mu=mu, R=R), 0.02, **kw)
+        wide, _ = bd.critical_load(jr.RodChannel.reference(mu=mu), 0.02, **kw)
+        assert float(curve.root[i, 0]) == pytest.approx(float(narrow.root), rel=1e-9)
+        assert float(narrow.root) != pytest.approx(float(wide.root), rel=1e-3)
+
+
 def test_boundary_curve_is_silent_unless_asked_for_progress(capfd):
     from jaxrod import boundary as bd
 
