@@ -102,6 +102,19 @@ def test_write_boundary_writes_the_result_whole_and_one_plain_row_per_load(tmp_p
     assert (tmp_path / "b.png").stat().st_size > 0
 
 
+def test_write_boundary_writes_a_failed_load_with_no_bracket(tmp_path, synthetic):
+    """A load whose search found no bracket (`bracket` None, v₀* NaN) is written as a row with
+    empty-valued bracket columns (NaN), beside the loads that have one."""
+    res = e3.boundary_3d([5.0, 20.0], n=8, rtol=0.01, dt=1e-5, progress=False)
+    res["points"][1].update(bracket=None, rod3d=math.nan)
+    stem = str(tmp_path / "b")
+    e3.write_boundary(res, stem)
+    rows = list(csv.DictReader(open(stem + ".csv")))
+    assert float(rows[0]["bracket_hi_mm_s"]) == pytest.approx(1e3 * res["points"][0]["bracket"][1], rel=1e-9)
+    assert all(math.isnan(float(rows[1][k])) for k in ("bracket_lo_mm_s", "bracket_hi_mm_s", "rod3d_mm_s"))
+    assert float(rows[1]["dF"]) == 20.0
+
+
 def test_e3_searches_the_settings_loads_and_writes_the_boundary_under_its_scheme(tmp_path, monkeypatch):
     """`e3` (3D part) at an explicit segment count: the boundary search gets the setting's loads,
     tolerance and horizon and the runs file under `out`; the boundary is written under a name
