@@ -20,11 +20,22 @@ def _true(dF):
     return C / math.sqrt(dF)
 
 
+class Calls(list):
+    """The labels asked for, (ΔF, v₀) in order; `built`: the arguments each label was made with."""
+
+    def __init__(self):
+        super().__init__()
+        self.built = []
+
+
 @pytest.fixture
 def synthetic(monkeypatch):
-    calls = []
+    calls = Calls()
 
     def label_3d(rod, n, dt, t1, friction_at="surface", ends="pinned", sink=e3.SINK, scheme="implicit"):
+        calls.built.append(dict(mu=float(rod.mu_s), n=n, dt=dt, t1=t1, friction_at=friction_at, ends=ends, sink=sink,
+                                scheme=scheme))
+
         def buckled(dF, v0):
             calls.append((float(dF), float(v0)))
             return 1.0 if float(v0) > _true(float(dF)) else 0.0
@@ -55,6 +66,9 @@ def test_boundary_3d_brackets_a_known_boundary_and_fits_its_exponent(tmp_path, s
     assert res["exponent_rod3d"] == pytest.approx(-0.5, abs=0.01)
     assert res["exponent_field"] == pytest.approx(-0.5, abs=1e-9)
     assert res["exponent_theory"] == -0.5
+    # one label for every load, made with the search's settings
+    assert synthetic.built == [dict(mu=pytest.approx(0.2, rel=1e-6), n=8, dt=1e-5, t1=0.4, friction_at="surface",
+                                    ends="clamped", sink=e3.SINK, scheme="implicit")]
     assert {k: res[k] for k in ("n_segments", "mu", "ends", "friction_at", "rtol", "dt", "t1", "scheme", "sink")} == dict(
         n_segments=8, mu=0.2, ends="clamped", friction_at="surface", rtol=0.01, dt=1e-5, t1=0.4, scheme="implicit",
         sink=e3.SINK)

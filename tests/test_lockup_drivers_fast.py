@@ -610,3 +610,23 @@ def test_a_lane_of_a_batched_record_keeps_the_shared_entries_and_takes_its_own_r
     np.testing.assert_array_equal(got["f_in"], [4.0, 5.0, 6.0, 7.0])
     np.testing.assert_array_equal(got["push"], [-4.0, -5.0, -6.0, -7.0])
     assert got["u"].shape == (4, 11) and np.all(got["u"] == 2)
+
+
+def test_a_job_gives_each_lane_its_mu_from_mul_over_ell_at_its_rod_length(tmp_path, monkeypatch):
+    """`_job` on a group at L/ℓ = 2 (the rod two buckle lengths long: μ = 1 gives L = 2ℓ) runs
+    the lanes μL/ℓ = 0.5 and 1 at μ = X/(L/ℓ) = 0.25 and 0.5, and writes each lane's X back."""
+    from jaxrod.lockup import staircase as sc
+
+    seen = {}
+
+    def stand_in(rod, mus, starts, speed, **kw):
+        seen.update(mus=list(mus), speed=speed)
+        return dict(lanes=[dict(profiles=[]) for _ in mus], n=8, dt=1e-4, F0=1.0, ell=1.0, l0=0.1, r=0.005)
+
+    monkeypatch.setattr(sc, "staircase", stand_in)
+    S = dict(lx.SETTINGS["tiny"], f_c=1.5)
+    path = str(tmp_path / "job.json")
+    lx._job(((2.0, (0.5, 1.0), None), (8, 10e-3), S, path, False))
+    assert seen == dict(mus=[0.25, 0.5], speed=10e-3)
+    job = json.load(open(path))
+    assert [lane["X"] for lane in job["lanes"]] == [0.5, 1.0] and job["mu_of_X"] == 0.5

@@ -566,3 +566,14 @@ def test_the_deprecated_bisect_halves_in_log_space_unless_told_otherwise():
     with pytest.warns(DeprecationWarning):
         lo, hi = jr.search.bisect(lambda x: x > 0.5, 0.1, 10.0, 1, geometric=False)
     assert (float(lo), float(hi)) == (0.1, pytest.approx(5.05, rel=1e-15))
+
+
+def test_a_ramp_load_by_hand_before_during_and_after_its_ramp():
+    """`RampLoad(10, 20, t_start=1, t_end=3)`: 10 N until 1 s, linear to 20 N at 3 s, then held;
+    a ramp of zero length is a step at its time (the start value at it, the end value after)."""
+    ramp = jr.RampLoad(10.0, 20.0, 1.0, 3.0)
+    ts = jnp.array([0.0, 1.0, 1.5, 2.0, 3.0, 4.0])
+    np.testing.assert_allclose(jax.vmap(ramp)(ts), [10.0, 10.0, 12.5, 15.0, 20.0, 20.0], rtol=1e-15)
+    step = jr.RampLoad(10.0, 20.0, 2.0, 2.0)
+    np.testing.assert_array_equal(jax.vmap(step)(jnp.array([1.0, 2.0, 2.5])), [10.0, 10.0, 20.0])
+    assert [float(x) for x in ramp.extremes()] == [10.0, 20.0]

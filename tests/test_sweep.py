@@ -567,3 +567,16 @@ def test_a_sweep_over_loads_takes_its_step_from_the_largest_load():
     assert steps[40.0] < 0.5 * min(steps[1.0], steps[spec.dF])
     assert res.meta["dt"] == pytest.approx(steps[40.0], rel=1e-12)
     np.testing.assert_array_equal(res.outputs["result"], [0, 0])
+
+
+def test_zipped_inputs_of_length_one_make_one_member():
+    """`combine="zip"` with every input a scalar or of length 1 is one member, the same as the
+    grid of those inputs (and a length-1 input zips with a longer one by broadcasting)."""
+    spec = SweepSpec(model="mode", t1=0.01, dt=1e-4)
+    zipped = sweep(spec, {"dF": 2.0, "amplitude": [0.01]}, combine="zip", progress=False)
+    grid = sweep(spec, {"dF": 2.0, "amplitude": [0.01]}, progress=False)
+    assert len(zipped) == len(grid) == 1
+    for k in grid.outputs:
+        np.testing.assert_array_equal(zipped.outputs[k], grid.outputs[k])
+    wide = sweep(spec, {"dF": [2.0], "amplitude": [0.01, 0.02]}, combine="zip", progress=False)
+    np.testing.assert_array_equal(wide.inputs["dF"], [2.0, 2.0])
