@@ -146,6 +146,8 @@ def _predicted_against_wide(n, dF):
     return pred["runs"], int(wide.evaluations)
 
 
+@pytest.mark.slow  # the real 3D label at 60 segments (~30 s cold); tests/test_e3_boundary_records.py runs the
+# search on a synthetic label, checking what the label is made with, in the default suite
 def test_predicted_3d_search_brackets_the_boundary_at_60_segments():
     """E3's 3D search from the field model's v₀* (60 segments, 20 N, horizon 0.2 s) meets the
     target of ≤ 10 runs to a bracket of 1 %, and plain runs of the scene (`Scene.run`, not the

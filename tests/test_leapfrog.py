@@ -92,7 +92,8 @@ def test_a_rod_held_by_static_friction_does_not_move(scheme):
         assert bool(sol.stuck[0]) == held
 
 
-@pytest.mark.parametrize("kind, scheme", [("field", "leapfrog"), ("rod3d", "leapfrog"), ("rod3d", "implicit")])
+@pytest.mark.parametrize("kind, scheme", [("field", "leapfrog"), ("rod3d", "leapfrog"),
+                                          pytest.param("rod3d", "implicit", marks=pytest.mark.slow)])  # ~20 s cold
 def test_the_velocity_pass_in_the_step_leaves_the_run_as_it_is(kind, scheme):
     """A save interval ends with one more pass through the step, the velocity pass
     (`ProjectedLeapfrog.velocity_in_step`: one copy of the friction pass to compile): it returns

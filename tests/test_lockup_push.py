@@ -250,6 +250,7 @@ def test_past_lock_up_the_far_end_holds_still():
     assert np.min(r["f_in"][after]) > 20.0
 
 
+@pytest.mark.slow  # a long implicit push (~20 s cold)
 def test_the_implicit_scheme_biases_a_steady_slide_by_beta_h2_mu_g_EA_over_l():
     """The straight slide of the test above (μL/ℓ = 0.5, far load 0.5 F₀, 20 segments) with the
     implicit leapfrog: each step the friction pass takes μ_d g h off every node's velocity through

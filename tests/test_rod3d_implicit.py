@@ -77,6 +77,7 @@ def _ad_dense(model, x, Q):
     return out
 
 
+@pytest.mark.slow  # AD of the whole potential, dense (~25 s cold); the closed form against the AD blocks runs by default
 def test_the_element_hessians_are_the_potentials():
     """The per-element AD blocks assembled are the Hessian of the whole potential (stretch, shear,
     bend, twist, the Hertz wall with nodes in and out of it), to rounding."""
@@ -141,6 +142,7 @@ def _run(model, integrator, q0, v0, t1, n_save=5, **opts):
     return jax.jit(lambda q, v: jr.simulate(model, integrator, q, v, t1, n_save=n_save, options=opts, throw=False))(q0, v0)
 
 
+@pytest.mark.slow  # two 3D compilations (~20 s cold)
 def test_with_beta_and_gamma_zero_it_is_the_explicit_leapfrog():
     model, q0, v0 = _loaded()
     dt = 0.5 * step_limit(model)
@@ -172,6 +174,7 @@ def test_a_free_rod_stays_bounded_far_past_the_explicit_limit_and_gamma_damps_it
     assert speeds[0.1] < speeds[0.0]
 
 
+@pytest.mark.slow  # a 3D compilation (~15 s cold)
 def test_a_held_rod_does_not_creep_at_a_large_step():
     """A compressed rod resting on the bottom with μ = 0.3, pushed along its axis by 0.4 μ w per
     length (inside the friction cone): at 20× the explicit limit it does not slide."""
@@ -185,6 +188,7 @@ def test_a_held_rod_does_not_creep_at_a_large_step():
     assert float(jnp.max(jnp.abs(sol.q.x[-1, :, 0] - q0.x[:, 0]))) < 1e-9
 
 
+@pytest.mark.slow  # a 3D compilation and two runs (~15 s cold)
 def test_the_critical_velocity_at_60_segments_matches_the_explicit_scheme():
     """E3's run (dead load F⁰₆ + 5 N, μ = 0.3, sine mode 6, 0.4 s) at the implicit scheme's default
     step (`jaxrod.rod3d.IMPLICIT_DT`, 8× the explicit step here): stable 1 % below the explicit

@@ -1,4 +1,5 @@
-"""The 3D rod loaded past the frictionless buckling load F⁰₆, in the default suite, against
+"""The 3D rod loaded past the frictionless buckling load F⁰₆ (`slow`: one 3D compilation, about
+half a minute of CPU cold; it killed no mutant of the held-out draws that a faster test did not), against
 references that nothing in the 3D rod uses: its growth rate against the single-mode theory (P3
 of docs/physics.md), and its critical velocity against the field model's. Both run through one
 compiled program of two 60-segment rods (the friction coefficient, the load and the initial
@@ -7,10 +8,13 @@ state are array leaves), so the module pays one 3D compilation."""
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from scipy.optimize import brentq
 
 import jaxrod as jr
 from jaxrod.rod3d import Rod3D
+
+pytestmark = pytest.mark.slow
 
 N = 60
 T1, N_SAVE = 0.4, 81

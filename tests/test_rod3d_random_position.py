@@ -7,6 +7,7 @@ forces of a µm-scale shape are ~1e-6 of the applied ones): y = ½ (f/ρ − μ_
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import jaxrod as jr
 from jaxrod import theory
@@ -37,6 +38,7 @@ def _hand(p, model):
     return np.where(slides, 0.5 * (f / rho - np.sign(f) * mu * g) * p.duration**2, 0.0), slides
 
 
+@pytest.mark.slow  # a 3D run with a force pulse (~15 s cold)
 def test_a_random_position_pulse_moves_the_3d_rod_as_the_hand_result():
     model, p, q, v = _forced(2.0)
     y, slides = _hand(p, model)

@@ -16,6 +16,7 @@ from jaxrod.rod3d import Rod3D
 from jaxrod.scene import Scene, make_perturbation
 
 
+# the default suite's only 3D sweep (the slow tests/test_sweep.py has the other)
 def test_a_random_shape_released_from_rest_gets_the_label_of_the_run_without_the_stop():
     """Random lateral shapes (±2 mm) released from rest at ΔF = 0 (below the frictionless load:
     they slide back and stay) and ΔF = 40 N (outside the stable zone: they buckle), through a
