@@ -6,9 +6,12 @@ the force it must resist from rest is within μ_s N), or every rod released from
 declared stuck at step 0. References: the same runs without the stop (which cannot freeze), and
 Coulomb's law for a free rod pushed along the channel."""
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import jaxrod as jr
 from jaxrod import SweepSpec, sweep
@@ -16,18 +19,38 @@ from jaxrod.rod3d import Rod3D
 from jaxrod.scene import Scene, make_perturbation
 
 
-# the default suite's only 3D sweep (the slow tests/test_sweep.py has the other)
-def test_a_random_shape_released_from_rest_gets_the_label_of_the_run_without_the_stop():
+@functools.lru_cache(maxsize=1)
+def _random_shapes():
     """Random lateral shapes (±2 mm) released from rest at ΔF = 0 (below the frictionless load:
     they slide back and stay) and ΔF = 40 N (outside the stable zone: they buckle), through a
-    3D sweep with the default stop: each member's label, buckling time and amplitude are those of
-    its single run without the stop (which cannot freeze a rod), to one step. Before the force
-    test every member stopped at step 0 and was reported stable."""
+    3D sweep with the default stop (12 segments, to 0.05 s)."""
     spec = SweepSpec(model="rod3d", n=12, perturbation="random-shape", amplitude=2e-3, t1=0.05)
-    res = sweep(spec, {"dF": [0.0, 40.0], "realization": [0, 1]}, seed=3, progress=False)
-    assert res.outputs["result"].tolist() == [0] * 4
-    np.testing.assert_array_equal(res.outputs["buckled"], [False, False, True, True])
-    assert np.all(res.outputs["steps"] > 0)
+    return sweep(spec, {"dF": [0.0, 40.0], "realization": [0, 1]}, seed=3, progress=False)
+
+
+def test_a_random_shape_sweep_released_from_rest_runs_until_it_buckles_or_to_its_end():
+    """(The default suite's only 3D sweep: tests/test_sweep.py's is `slow`.) The members at
+    ΔF = 0 run to t1 below the threshold of 0.5 rad; those at 40 N stop when they reach it; each
+    reports its steps, its stop time and a dominant mode among the 11 interior nodes' modes.
+    Before the force test every member stopped at step 0 and was reported stable."""
+    res = _random_shapes()
+    out, dt = res.outputs, res.meta["dt"]
+    assert out["result"].tolist() == [0] * 4
+    np.testing.assert_array_equal(out["buckled"], [False, False, True, True])
+    np.testing.assert_array_equal(out["t_stop"][:2], [0.05, 0.05])
+    np.testing.assert_array_equal(out["t_stop"][2:], out["t_buckle"][2:])
+    assert np.all(out["max_theta"][:2] < 0.5) and np.all(out["max_theta"][2:] >= 0.5)
+    assert np.all(np.isinf(out["t_buckle"][:2])) and np.all(out["t_buckle"][2:] < 0.05)
+    # steps of the largest h ≤ dt that puts every save on a step (0.2 % below dt here)
+    np.testing.assert_allclose(out["steps"] * dt, out["t_stop"], rtol=5e-3)
+    assert np.all((out["dominant_mode"] >= 1) & (out["dominant_mode"] <= 11))
+
+
+@pytest.mark.slow  # a 3D run without the stop (~20 s cold), beside the sweep above
+def test_a_random_shape_released_from_rest_gets_the_label_of_the_run_without_the_stop():
+    """Each member of the sweep above has the label, buckling time and amplitude of its single
+    run without the stop (which cannot freeze a rod), to one step."""
+    res = _random_shapes()
     rod, dt = jr.RodChannel.reference(0.3), res.meta["dt"]
     opts = jr.RunOptions(stop_when_stuck=False, save_state=False)
     for i in range(len(res)):
