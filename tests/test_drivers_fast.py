@@ -533,6 +533,9 @@ def test_e1_speed_records_field_and_known_3d_runs_and_fits_the_exponent(tmp_path
     np.testing.assert_allclose(res["field"]["overshoot_exponent"], [2 / 3] * 3, rtol=1e-10)
     np.testing.assert_allclose(res["field"]["critical_force_N"][1], F0 + np.array([40.0, 80.0, 120.0]) * 1e-2,
                                rtol=1e-12)  # at 1 mm/s, (1e-3)^(2/3) = 1e-2
+    assert (res["field"]["speeds_m_s"], res["field"]["v0_m_s"]) == (list(S["field_speeds"]), list(S["v0s"]))
+    assert (res["rod3d"]["speeds_m_s"], res["rod3d"]["v0_m_s"]) == (list(S["rod_speeds"]), list(S["v0s_3d"]))
+    assert res["threshold_field_rad"] == 0.5
     assert res["rod3d"]["critical_force_N"][0] == [2.9, 2.6]
     assert res["rod3d"]["critical_force_N"][1][0] == 2.5 and math.isnan(res["rod3d"]["critical_force_N"][1][1])
     e3d = res["rod3d"]["overshoot_exponent"]
