@@ -157,6 +157,21 @@ def test_critical_load_curve_searches_the_rod_with_its_overrides():
         assert float(narrow.root) != pytest.approx(float(wide.root), rel=1e-3)
 
 
+def test_critical_load_curve_gives_every_point_its_iteration_budget():
+    """`max_iter` bounds the search of each point: with 2 iterations and a tolerance no search
+    meets in 2, every point stops at `max_iterations` after the runs `critical_load` makes with
+    the same budget; with the default budget the same points converge."""
+    from jaxrod import boundary as bd
+
+    kw = dict(model="mode", rtol=1e-12, bracket=(1e-3, 400.0), sensitivities=())
+    capped, _ = bd.critical_load_curve([0.2, 0.4], 0.02, max_iter=2, **kw)
+    one, _ = bd.critical_load(jr.RodChannel.reference(mu=0.4), 0.02, max_iter=2, **kw)
+    assert (np.asarray(capped.result) == int(bd.ROOT_RESULTS.max_iterations)).all()
+    assert int(capped.evaluations[1, 0]) == int(one.evaluations) == 4
+    full, _ = bd.critical_load_curve([0.2, 0.4], 0.02, **kw)
+    assert (np.asarray(full.result) == int(bd.ROOT_RESULTS.converged)).all()
+
+
 def test_boundary_curve_is_silent_unless_asked_for_progress(capfd):
     from jaxrod import boundary as bd
 

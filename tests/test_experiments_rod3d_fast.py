@@ -11,6 +11,7 @@ import csv
 import datetime
 import importlib
 import math
+import os
 from types import SimpleNamespace
 
 import jax
@@ -420,6 +421,18 @@ def test_best_prefers_converged_then_the_longest_horizon_then_the_widest_bracket
     assert p3._best(rows[:3]) is rows[2]
     assert p3._best(rows[:2]) is rows[1]
     assert p3._best(rows[:1]) is rows[0] and p3._best([]) is None
+    narrow = dict(result="0", t1="2.0", width="0.5")  # any bracket is wider than none
+    assert p3._best([rows[2], narrow]) is narrow and p3._best([narrow, rows[2]]) is narrow
+
+
+def test_the_commit_recorded_is_the_checkouts_short_hash():
+    """A point's `commit` column: `git rev-parse --short HEAD` of the checkout the package is in."""
+    import subprocess
+
+    here = os.path.dirname(os.path.abspath(p3.__file__))
+    git = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=here)
+    assert git.returncode == 0 and git.stdout.strip()  # the tests run in a checkout
+    assert p3._commit() == git.stdout.strip()
 
 
 def test_found_takes_the_best_row_of_a_point_on_at_least_the_horizon(tmp_path):

@@ -195,6 +195,27 @@ def test_lock_up_is_told_by_the_far_end_and_the_entry_force():
     assert locked(dict(stalled, f_in=np.where(push > 0.1, np.nan, 4.0))) is None
 
 
+@pytest.mark.parametrize("scheme", ["implicit", "leapfrog"])
+def test_inject_runs_its_phases_with_the_scheme_it_is_given(monkeypatch, scheme):
+    """`inject(scheme=...)` steps the rod with that integrator (the phase runner, which defaults
+    to the explicit leapfrog, stands in here: it records its scheme and stops the call)."""
+    import jaxrod.lockup.push as push_module
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def phases(*args, scheme="leapfrog", **kw):
+        seen.append(scheme)
+        raise Stop
+
+    monkeypatch.setattr(push_module, "_phases", phases)
+    with pytest.raises(Stop):
+        inject(push_rod(0.5, 0.02, 0.5), 0.0, 1e-3, 0.01, n=8, scheme=scheme)
+    assert seen == [scheme]
+
+
 @pytest.mark.slow  # 40 s: two vmapped and one single compilation
 def test_lanes_are_single_injections_and_a_locked_lane_is_held():
     """`inject_lanes`: lane k of one vmapped run is `inject` with its own μ and far load (to 1e-6

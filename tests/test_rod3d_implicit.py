@@ -112,12 +112,14 @@ def test_the_damping_impulse_is_gamma_h_times_the_damped_stiffness_on_every_free
     """`implicit_kick(..., with_impulse=True)`: P = −γ h H_d (hk v + h Δv) on the free degrees of
     freedom, zero on the held ones, against the stacked damped Hessian and the block product of
     the tests' reference; on a rod of heavy nodes (4.3–8.5 kg each, a steel pipe's segments:
-    the kick scales by M^{−½} < 1 there)."""
-    from jaxrod.rod3d.hessian import _blocks_of, _free, implicit_kick
+    the kick scales by M^{−½} < 1 there), resting on the wall under its weight: the wall's
+    stiffness is in the kick's matrix but is not damped."""
+    from jaxrod.rod3d.hessian import _blocks_of, _free, _wall_components, implicit_kick
 
-    model = Rod3D(jr.RodChannel.reference(0.3, rho_v=6.45e6), 4, channel=False, gravity=False, control="force")
+    model = Rod3D(jr.RodChannel.reference(0.3, rho_v=6.45e6), 4, control="force")
     assert float(model.mass.min()) > 4.0
     q, v = model.initial_state(0.0, lateral_velocity=sine_velocity(model, 1e-3))
+    assert float(jnp.min(_wall_components(model, q.x)[2])) > 1e6  # every node pressed on the wall [N/m]
     a = model.accelerations(q, v, 0.0)
     h, gamma = 1e-3, 0.1
     out, P = implicit_kick(model, q, v, a, h, h, 0.25, gamma, with_impulse=True)

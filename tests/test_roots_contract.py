@@ -89,6 +89,17 @@ def test_newton_with_an_absolute_tolerance_finds_a_root_at_zero():
     assert int(r.result) == CAP
 
 
+def test_newton_on_a_line_lands_on_its_root_and_stops_there():
+    """g(x) = x on [−1, 1]: one Newton step from 1 lands exactly on the root 0, which then becomes
+    the bracket's lower end (g(0) = 0 ≤ 0); a root on the bracket's end is a root, so the search
+    stops there, converged in three runs (the two ends and 0), though no relative tolerance can
+    be met at 0."""
+    g, seen = recorded(lambda x: x)
+    r = bd.safeguarded_newton(g, -1.0, 1.0, rtol=1e-10)
+    assert int(r.result) == OK and float(r.root) == 0.0 and float(r.lo) == 0.0
+    assert seen == [-1.0, 1.0, 0.0] and int(r.evaluations) == 3
+
+
 @pytest.mark.parametrize("geometric", [True, False])
 def test_bisection_halves_the_bracket_in_the_space_it_is_asked_for(geometric):
     """The label x > 10 on [1, 10⁴]: the first run inside the bracket is at √(lo·hi) = 100 for

@@ -577,3 +577,19 @@ def test_a_ramp_load_by_hand_before_during_and_after_its_ramp():
     step = jr.RampLoad(10.0, 20.0, 2.0, 2.0)
     np.testing.assert_array_equal(jax.vmap(step)(jnp.array([1.0, 2.0, 2.5])), [10.0, 10.0, 20.0])
     assert [float(x) for x in ramp.extremes()] == [10.0, 20.0]
+
+
+@pytest.mark.parametrize("kind", ["random-velocity", "random-position", "random-shape"])
+def test_a_random_perturbation_made_without_a_key_is_the_one_of_key_0(kind):
+    """`make_perturbation` documents `key` as defaulting to `jax.random.key(0)`: the perturbation
+    made without one is that one, and not another key's."""
+    from jaxrod.registry import make_perturbation
+
+    def leaves(p):
+        return [np.asarray(jax.random.key_data(x) if jnp.issubdtype(x.dtype, jax.dtypes.prng_key) else x)
+                for x in jax.tree_util.tree_leaves(p)]
+
+    default, zero, one = (leaves(make_perturbation(kind, 0.01, **kw))
+                          for kw in ({}, {"key": jax.random.key(0)}, {"key": jax.random.key(1)}))
+    assert all(np.array_equal(a, b) for a, b in zip(default, zero, strict=True))
+    assert not all(np.array_equal(a, b) for a, b in zip(default, one, strict=True))

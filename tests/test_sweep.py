@@ -544,6 +544,28 @@ def test_a_sweeps_progress_bar_names_the_sweep_and_counts_members(capfd):
     assert last.startswith("sweep: 100%") and "3/3" in last and last.endswith(" members/s]")
 
 
+def test_a_resumed_sweeps_bar_says_resumed_until_it_has_run_a_chunk(tmp_path, capfd, monkeypatch):
+    """A sweep stopped after its first chunk and run again: while it counts the chunk found on
+    disk its bar shows "0.0 members/s (resumed)" (none run yet by this call); once it has run
+    the last chunk, this call's rate alone."""
+    monkeypatch.setenv("COLUMNS", "200")  # a bar as wide as a terminal's (not cut at 80 columns)
+    spec, inputs, path = SweepSpec(model="mode", t1=0.01, dt=1e-4), {"dF": [1.0, 2.0, 3.0]}, str(tmp_path / "s")
+
+    class Stop(Exception):
+        pass
+
+    def stop(c):
+        raise Stop
+
+    with pytest.raises(Stop):
+        sweep(spec, inputs, chunk_size=2, path=path, progress=False, on_chunk=stop)
+    capfd.readouterr()
+    sweep(spec, inputs, chunk_size=2, path=path, progress=True)
+    lines = [ln.strip() for ln in capfd.readouterr().err.replace("\r", "\n").splitlines() if ln.strip()]
+    assert any(ln.endswith(", 0.0 members/s (resumed)]") for ln in lines), lines
+    assert "3/3" in lines[-1] and lines[-1].endswith(" members/s]") and "resumed" not in lines[-1]
+
+
 def test_a_finished_sweep_is_recognised_whatever_order_its_rod_overrides_were_written_in(tmp_path):
     """The rod overrides are a mapping: `{"L": 3, "R": 0.006}` and `{"R": 0.006, "L": 3}` are one
     sweep, so a sweep written with one is found finished by the other (no member runs again)."""

@@ -120,7 +120,10 @@ def sweep(
     smaller sweep. Every process needs the same number of local devices; `on_chunk` is called
     in the process that ran the chunk, and only process 0 shows progress.
 
-    **Returns:** a [`jaxrod.SweepResult`][] (`meta["processes"]`: the process count).
+    **Returns:** a [`jaxrod.SweepResult`][] (`meta["processes"]`: the process count;
+    `meta["member_steps"]`: the steps the members took; `meta["lane_steps"]`: under `"pool"`,
+    the lane steps computed by this call, busy or not — under `"chunk"` they are not counted
+    and it is 0).
 
     **Raises:** `ValueError` for unknown names, bad shapes or a mismatched resume — before
     any member runs. Bad *values* never raise: those members get a result code.
