@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/jaxrod map --out results/demo
 
-# Two pytest workers (pytest-xdist), one file per worker: CI has 2 cores, and most of the
+# Two pytest workers (pytest-xdist) taking tests one by one: CI has 2 cores, and most of the
 # suite's time is single-threaded XLA compilation. TEST_WORKERS=0 runs in one process.
 TEST_WORKERS ?= 2
 

@@ -1,16 +1,29 @@
-import jax
+import os
+
+# The tests compile far more than they run: most of the default suite's time is XLA compiling
+# many programs that each run briefly. JAX's switch for that case (XLA's backend optimisation
+# level 0, LLVM's expensive passes off) takes about a sixth off the cold suite
+# (benchmarks/results/suite_time_variants.txt); the programs run slower, which the tests' short
+# runs do not repay. Set in the environment before JAX is imported, so that the processes the
+# tests start (the command line, two-process sweeps compared bit for bit with this one) compile
+# alike. JAX_DISABLE_MOST_OPTIMIZATIONS=0 in the environment compiles the tests as users' programs
+# are compiled (this file is the tests' only).
+os.environ.setdefault("JAX_DISABLE_MOST_OPTIMIZATIONS", "1")
+
+import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
 jax.config.update("jax_numpy_rank_promotion", "raise")
+
+jax.config.update("jax_disable_most_optimizations",  # in case JAX was imported before this file
+                  os.environ["JAX_DISABLE_MOST_OPTIMIZATIONS"].lower() in ("1", "true", "yes", "on", "y", "t"))
 
 # One compilation cache for the whole run (both xdist workers, every file): many tests compile
 # the same runs (a scene's simulate, a sweep's pool), and each worker would compile them again.
 # It also lets `make test` schedule tests one by one (--dist worksteal: 243 s on a clean clone
 # against 296 s with whole files per worker, 2026-12-03). The folder starts empty on a clean
 # clone (CI) and is not committed.
-import os  # noqa: E402
-
 jax.config.update("jax_compilation_cache_dir", os.path.join(os.path.dirname(os.path.dirname(__file__)),
                                                             ".pytest_cache", "jax"))
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
