@@ -66,6 +66,25 @@ def test_worst_case_field_has_the_norm_it_reports_and_is_the_smallest_found(wors
     assert r["random_buckle_at_worst_norm"] == 0.0
 
 
+def test_worst_case_sine_norm_is_the_critical_rms_of_the_scenes_own_sine(worst):
+    """`norm_sine` is the critical RMS norm of the mode-6 sine field: a sine of amplitude a at the
+    8 interior nodes s_i = iL/9 has RMS a·√(9/16) (Σᵢ sin²(6πi/9) = 9/2), so the scene's own
+    sine perturbation (`make_perturbation`) of amplitude norm_sine/√(9/16) is critical: 1 %
+    above it the rod buckles, 1 % below it does not."""
+    from jaxrod import boundary as bd
+    from jaxrod.scene import make_perturbation
+
+    rod, r = worst
+    dt = jr.Scene(rod, 0.0, kind="field", n=8).step()
+    a = float(r["norm_sine"]) / math.sqrt(9 / 16)
+
+    def label(amplitude):
+        return float(bd.rod_indicator(jr.Scene(rod, 5.0, make_perturbation("sine", amplitude, 6), "field", 8, 6, dt),
+                                      0.1))
+
+    assert label(1.01 * a) > 0 > label(0.99 * a)
+
+
 def test_worst_case_spectrum_and_single_mode_prediction_follow_the_theory(worst):
     rod, r = worst
     assert r["spectrum"].shape == (8,)

@@ -776,3 +776,9 @@ def test_e1_critical_force_of_each_member_is_its_own_first_peak_past_the_frictio
     np.testing.assert_array_equal(res["critical_force"], [10.0, 13.0])
     np.testing.assert_allclose(res["d_critical"], [3e-4, 1.2e-3], rtol=1e-12)
     assert res["peaked"].tolist() == [True, True]
+    # without dt or dt_fraction: the scheme's default step at the first member's initial state
+    asked.clear()
+    exp3d.e1_curves(0.3, (10e-3, 30e-3), n=4, t1=0.01, n_save=11, scheme="verlet")
+    model = Rod3D(jr.RodChannel.reference(0.3), 4, control="displacement", speed=1e-3)
+    q, _ = model.initial_state(0.0, lateral_velocity=sine_velocity(model, 10e-3))
+    assert asked[0][0] == pytest.approx(default_step(model, q, "verlet"), rel=1e-12)

@@ -147,14 +147,15 @@ def test_mismatched_resume_is_refused_and_metadata_round_trips(tmp_path):
 
 def test_bad_member_is_flagged_and_the_rest_complete():
     spec = SweepSpec(model="field", n=16, perturbation="sine", t1=0.3)
-    mus = [0.3, float("nan"), -0.1, 0.3]
-    res = sweep(spec, {"mu": mus, "dF": [5.0, 5.0, 5.0, 20.0], "amplitude": 0.05}, combine="zip", progress=False)
+    mus = [0.3, float("nan"), -0.1, 0.3, 0.3]  # the last member: a negative amplitude
+    res = sweep(spec, {"mu": mus, "dF": [5.0, 5.0, 5.0, 20.0, 5.0], "amplitude": [0.05] * 4 + [-0.05]},
+                combine="zip", progress=False)
     codes = res.outputs["result"].tolist()
-    assert codes == [0, jr.RESULTS.invalid_input, jr.RESULTS.invalid_input, 0]
+    assert codes == [0, jr.RESULTS.invalid_input, jr.RESULTS.invalid_input, 0, jr.RESULTS.invalid_input]
     good = sweep(spec, {"mu": [0.3, 0.3], "dF": [5.0, 20.0], "amplitude": 0.05}, combine="zip", progress=False)
     for k in EXACT:
         np.testing.assert_array_equal(res.outputs[k][[0, 3]], good.outputs[k])
-    assert "2 an input value is outside its valid range" in res.summary()
+    assert "3 an input value is outside its valid range" in res.summary()
 
 
 def test_configuration_errors_are_caught_before_any_work(tmp_path):
