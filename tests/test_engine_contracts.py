@@ -126,6 +126,21 @@ def test_a_traced_rod_without_a_step_is_refused_naming_scene_dt():
     assert math.isfinite(step(2e11))
 
 
+def test_a_single_mode_scenes_field_grid_steps_at_0_4_of_its_stability_limit():
+    """A field perturbation for the single mode is drawn on a field grid of `n_grid` nodes; its
+    step `grid_dt` defaults to 0.4 of that grid's explicit limit 2/ω_max (the limit as the
+    integrator states it), and a given `grid_dt` is taken as it is."""
+    from jaxrod.models.field import FieldModel
+
+    pert = RandomForce.from_settings(2.0, 6, jax.random.key(0), 1e-3)
+    scene = jr.Scene(ROD, 5.0, pert, kind="mode", n_grid=32)
+    grid, integrator = scene._grid()
+    assert isinstance(grid, FieldModel) and grid.n_nodes == 32
+    limit = float(np.min(np.asarray(jr.ProjectedVerlet(1.0).step_limit(grid))))
+    assert integrator.dt == pytest.approx(0.4 * limit, rel=1e-12)
+    assert jr.Scene(ROD, 5.0, pert, kind="mode", n_grid=32, grid_dt=1e-6)._grid()[1].dt == 1e-6
+
+
 def test_critical_load_curve_member_is_the_search_with_its_documented_key():
     """Point (i, r) of `critical_load_curve` is `critical_load` with key fold_in(key(seed), i·R + r)."""
     from jaxrod import boundary as bd

@@ -255,6 +255,7 @@ CLOSED_FORMS = {
     "w-zero": (lambda: closed_forms.length_unit(1.0, 0.0, 1.0), "w = 0.0 N/m is invalid: it must be finite and > 0."),
     "r-inf": (lambda: closed_forms.force_unit(1.0, 1.0, np.inf), "r = inf m is invalid: it must be finite and > 0."),
     "F-zero": (lambda: closed_forms.helix_pitch(1.0, 0.0), "F = 0.0 N is invalid: it must be finite and > 0."),
+    "EI-zero-pitch": (lambda: closed_forms.helix_pitch(0.0, 1.0), "EI = 0.0 N*m^2 is invalid: it must be finite and > 0."),
     "F-negative-wall": (lambda: closed_forms.helical_wall_force(-1.0, 1.0, 1.0, 1.0),
                         "F = -1.0 N is invalid: it must be finite and >= 0."),
     "f_in-nan": (lambda: closed_forms.transfer(np.nan, 1.0, 1.0, 0.0),
