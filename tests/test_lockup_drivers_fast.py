@@ -436,6 +436,8 @@ def test_next_goes_half_way_to_the_secants_crossing_within_its_bounds():
     # a force that did not rise, far from f_c: noise, the growth step
     assert _next([(1.0, 3.0), (1.1, 2.9)], 1.1, 6.0, 0.03) == pytest.approx(1.1 * 1.12, rel=1e-12)
     assert _next([(1.1, 3.0), (1.1, 3.2)], 1.1, 6.0, 0.03) == pytest.approx(1.1 * 1.12, rel=1e-12)
+    # a repeat at the same value (no slope to read) within 10 % of f_c: the least step
+    assert _next([(1.1, 5.3), (1.1, 5.5)], 1.1, 6.0, 0.03) == pytest.approx(1.1 * 1.027, rel=1e-12)
 
 
 def test_a_staircase_brackets_both_lanes_and_records_every_stage():

@@ -593,3 +593,19 @@ def test_a_random_perturbation_made_without_a_key_is_the_one_of_key_0(kind):
                           for kw in ({}, {"key": jax.random.key(0)}, {"key": jax.random.key(1)}))
     assert all(np.array_equal(a, b) for a, b in zip(default, zero, strict=True))
     assert not all(np.array_equal(a, b) for a, b in zip(default, one, strict=True))
+
+
+def test_the_far_load_does_work_on_the_far_end_node_alone():
+    """`external_energy` of a rod against the far load F_far (a dead load on node 0 along +x, into
+    the rod: potential −F_far·x₀): moving the far end axially by d changes it by −F_far·d; moving
+    the next node axially changes nothing (no gravity or body force along the axis)."""
+    from jaxrod.rod3d import Rod3D
+    from jaxrod.rod3d.energy import external_energy
+
+    model = Rod3D(jr.RodChannel.reference(0.3), 4, control="displacement", speed=1e-3, far_load=2.0, ends="pinned")
+    q, _ = model.initial_state(0.0)
+    E0 = float(external_energy(model, q.x))
+    far = float(external_energy(model, q.x.at[0, 0].add(1e-3))) - E0
+    next_node = float(external_energy(model, q.x.at[1, 0].add(1e-3))) - E0
+    assert far == pytest.approx(-2.0 * 1e-3, rel=1e-9)
+    assert abs(next_node) < 1e-12
