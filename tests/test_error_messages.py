@@ -486,6 +486,20 @@ def test_sweep_rejects_a_step_outside_zero_to_the_members_limit_naming_the_limit
                     f"use 0 < dt < {limit:.4g} s.")
 
 
+def test_a_3d_sweep_under_a_random_perturbation_is_held_to_the_explicit_schemes_limit():
+    """The 3D rod runs its implicit scheme (no step limit) only under perturbations measured
+    adequate for it; under a random velocity its scenes run the explicit leapfrog, so a given
+    step of 1 s is refused against that scheme's limit (below a millisecond at 4 segments)."""
+    import re
+
+    spec = SweepSpec(model="rod3d", n=4, perturbation="random-velocity", dt=1.0)
+    with pytest.raises(ValueError) as err:
+        sweep(spec, {"dF": 5.0}, progress=False)
+    m = re.fullmatch(r"SweepSpec\.dt = 1\.0 s is invalid for model 'rod3d': the scheme's step limit is (\S+) s; "
+                     r"use 0 < dt < (\S+) s\.", str(err.value))
+    assert m and m.group(1) == m.group(2) and 0 < float(m.group(1)) < 1e-3, str(err.value)
+
+
 def test_sweep_rejects_a_sweep_whose_every_member_has_a_bad_rod():
     _raises_exactly(ValueError, lambda: sweep(SweepSpec(model="mode"), {"L": [-1.0, 0.0]}),
                     "no member of the sweep has valid rod parameters (the first: RodChannel.L = -1.0 m is invalid: "
