@@ -10,14 +10,12 @@ import os
 # are compiled (this file is the tests' only).
 os.environ.setdefault("JAX_DISABLE_MOST_OPTIMIZATIONS", "1")
 
+# JAX reads the variable as it is imported (nothing imports JAX before this file)
 import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_dtype_promotion", "strict")
 jax.config.update("jax_numpy_rank_promotion", "raise")
-
-jax.config.update("jax_disable_most_optimizations",  # in case JAX was imported before this file
-                  os.environ["JAX_DISABLE_MOST_OPTIMIZATIONS"].lower() in ("1", "true", "yes", "on", "y", "t"))
 
 # One compilation cache for the whole run (both xdist workers, every file): many tests compile
 # the same runs (a scene's simulate, a sweep's pool), and each worker would compile them again.
