@@ -44,6 +44,10 @@ def test_the_thresholds_decide_at_their_values():
     assert vd.verdict(PUSH, stop, 3.0 + PUSH, criterion=vd.Criterion(lock=0.03))["status"] == vd.TRANSIENT
     drift = lambda rate: vd.verdict(PUSH, PUSH, 3.0 * (1 + rate * PUSH / 0.06))["status"]  # rate per part
     assert drift(0.015) == vd.SLIDING and drift(0.03) == vd.TRANSIENT
+    # the strictest slide threshold, 1 (the far end keeps exact pace), is a valid criterion
+    exact = vd.Criterion(slide=1.0)
+    assert vd.verdict(PUSH, PUSH, np.full_like(PUSH, 3.0), criterion=exact)["status"] == vd.SLIDING
+    assert vd.verdict(PUSH, 0.99 * PUSH, np.full_like(PUSH, 3.0), criterion=exact)["status"] == vd.TRANSIENT
 
 
 def test_a_helix_turning_faster_than_the_segments_resolve_is_unresolved():

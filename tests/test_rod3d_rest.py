@@ -113,3 +113,26 @@ def test_a_free_rod_in_space_is_held_only_where_its_supports_hold_it():
     assert nodes.shape == (7,) and segments.shape == (6,)
     assert nodes.tolist() == [True, False, False, False, False, False, True]
     assert segments.tolist() == [True, False, False, False, False, True]
+
+
+def test_the_stick_test_up_the_channel_wall_is_the_test_at_the_bottom_turned():
+    """The channel is round: the rod at rest on its bottom, turned by φ = 0.6 rad about the axis
+    together with its weight (a body force w(R ĝ − ĝ) per length), rests on the wall 0.6 rad up
+    its side. A push along the wall's tangent t₂ = (0, cos φ, sin φ) of 0.49 w per length is held
+    (μ_s = 0.5, friction at the centre line) and 0.51 w is not, as a lateral push at the bottom."""
+    rod = jr.RodChannel.reference(0.5).with_friction(0.5, 0.3)
+    w, phi = float(rod.w), 0.6
+    c, s = np.cos(phi), np.sin(phi)
+    R = jnp.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    g = np.array([0.0, 0.0, -1.0])
+    turned_weight = w * (np.asarray(R) @ g - g)
+    for ratio, held in ((0.49, True), (0.51, False)):
+        push = ratio * w * np.array([0.0, c, s])
+        m = Rod3D(rod, 12, ends="free", body_force=turned_weight + push, friction_at="axis")
+        q, v = m.initial_state()
+        q = type(q)(x=q.x @ R.T, Q=q.Q @ R.T)
+        e = q.x[:, 1:] / jnp.linalg.norm(q.x[:, 1:], axis=-1, keepdims=True)
+        np.testing.assert_allclose(np.asarray(e), np.tile([s, -c], (13, 1)), atol=1e-12)  # up the side
+        assert bool(m.is_stuck(q, v, m.acceleration(q))) == held, ratio
+        bottom = Rod3D(rod, 12, ends="free", body_force=(0.0, ratio * w, 0.0), friction_at="axis")
+        assert bool(bottom.is_stuck(*bottom.initial_state(), bottom.acceleration(bottom.initial_state()[0]))) == held
