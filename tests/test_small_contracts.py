@@ -127,6 +127,27 @@ def test_a_rod_with_a_bad_length_or_modulus_is_invalid_whatever_its_poisson_rati
     assert not bool(_valid(bad, {"dF": 5.0, "amplitude": 1e-3}))
 
 
+@pytest.mark.parametrize("changes, inputs, valid", [
+    ({"rho_v": 0.0}, {}, False), ({"R": -1e-3}, {}, False), ({"E": jnp.inf}, {}, False),
+    ({"nu": -1.0}, {}, False), ({"nu": -0.999}, {}, True), ({"nu": 0.5}, {}, False), ({"nu": 0.499}, {}, True),
+    ({"mu_s": 0.3, "mu_d": 0.3}, {}, True), ({"mu_s": 0.3, "mu_d": 0.3 + 1e-12}, {}, False),
+    ({"mu_d": 0.0}, {}, True), ({"mu_d": -1e-12}, {}, False), ({"mu_s": jnp.inf, "mu_d": 0.3}, {}, False),
+    ({"mu_s": jnp.nan}, {}, False),
+    ({}, {"dF": -20.0}, True), ({}, {"dF": jnp.inf}, False), ({}, {"dF": jnp.nan}, False),
+    ({}, {"amplitude": 0.0}, True), ({}, {"amplitude": -1e-12}, False), ({}, {"amplitude": jnp.nan}, False),
+], ids=lambda x: str(x))
+def test_a_swept_member_is_valid_exactly_inside_the_physical_ranges(changes, inputs, valid):
+    """Positive finite sizes, moduli, density, clearance and gravity; −1 < ν < 1/2 (open);
+    0 ≤ μ_d ≤ μ_s, both finite; a finite ΔF of either sign; a finite amplitude ≥ 0."""
+    from jaxrod.sweeps.member import _valid
+
+    rod = jr.RodChannel.reference(0.3)
+    for field, value in changes.items():
+        rod = eqx.tree_at(lambda r, f=field: getattr(r, f), rod, jnp.asarray(value, float))
+    p = {k: jnp.asarray(v, float) for k, v in inputs.items()}
+    assert bool(_valid(rod, p)) == valid
+
+
 # ------------------------------------------------------------------ integrators' options
 
 
@@ -609,3 +630,62 @@ def test_the_far_load_does_work_on_the_far_end_node_alone():
     next_node = float(external_energy(model, q.x.at[1, 0].add(1e-3))) - E0
     assert far == pytest.approx(-2.0 * 1e-3, rel=1e-9)
     assert abs(next_node) < 1e-12
+
+
+# ------------------------------------------------------------------ a sweep's members from its inputs
+
+
+def test_a_sweeps_inputs_expand_to_members_by_grid_or_zip():
+    """`grid`: every combination, the first input varying slowest (its shape is the inputs' lengths
+    in order); `zip`: members side by side, length-1 inputs repeated, scalars alone make one member.
+    Every value becomes a float (integers included)."""
+    from jaxrod.sweeps.run import _expand
+
+    flat, shape, names = _expand({"dF": [1, 2, 3], "amplitude": [0.1, 0.2]}, "grid")
+    assert shape == (3, 2) and names == ("dF", "amplitude")
+    assert flat["dF"].tolist() == [1.0, 1.0, 2.0, 2.0, 3.0, 3.0]
+    assert flat["amplitude"].tolist() == [0.1, 0.2] * 3
+    assert flat["dF"].dtype == np.float64
+    flat, shape, _ = _expand({"dF": 5, "amplitude": 0.1}, "zip")
+    assert shape == (1,) and {k: a.tolist() for k, a in flat.items()} == {"dF": [5.0], "amplitude": [0.1]}
+    flat, shape, _ = _expand({"dF": [1.0, 2.0, 3.0], "mu": 0.3, "amplitude": [0.2]}, "zip")
+    assert shape == (3,) and flat["mu"].tolist() == [0.3] * 3 and flat["amplitude"].tolist() == [0.2] * 3
+    flat["mu"][0] = 9.0  # each input is its own array, not a view of the broadcast one
+    assert flat["mu"].tolist() == [9.0, 0.3, 0.3]
+
+
+# ------------------------------------------------------------------ the boundary searches' settings
+
+
+def test_each_model_and_perturbation_gets_its_documented_search_method():
+    """Newton on the exact solution for the single mode under a sine velocity, whatever was asked;
+    otherwise the asked method, by default the departure rate for the reduced models and label
+    bisection for the 3D rod and for the single mode under a random perturbation. Anything else
+    is refused, naming the argument."""
+    from jaxrod.boundary.search import _method_of
+
+    for p in ("sine", "random-position", "random-velocity", "random-shape"):
+        assert _method_of(None, "field", p) == _method_of(None, "galerkin", p) == "departure"
+        assert _method_of(None, "rod3d", p) == "bisection"
+        assert _method_of("departure", "rod3d", p) == "departure"
+        assert _method_of("bisection", "field", p) == "bisection"
+        assert _method_of("bisection", "mode", p) == ("exact" if p == "sine" else "bisection")
+    assert _method_of(None, "mode", "random-position") == "bisection"
+    assert _method_of("departure", "mode", "random-shape") == "departure"
+    with pytest.raises(ValueError, match=r"^method = 'newton' is invalid: expected one of \('departure', 'bisection'\)"):
+        _method_of("newton", "field", "sine")
+
+
+def test_a_searched_rods_parameters_keep_its_static_excess_over_the_dynamic_coefficient():
+    """The searches see a rod as flat parameters with μ_d = `mu` and μ_s = `mu` + `mu_excess`:
+    back from them it is the same rod, and moving `mu` moves both coefficients together."""
+    from jaxrod.boundary.search import _params_of, _rod_of
+
+    rod = jr.RodChannel.reference(0.3).with_friction(0.5, 0.3)
+    p = _params_of(rod, dF=4.0)
+    assert float(p["mu"]) == 0.3 and float(p["mu_excess"]) == pytest.approx(0.2, rel=1e-12) and p["dF"] == 4.0
+    back = _rod_of(type(rod), p)
+    for f in ("L", "d", "E", "rho_v", "nu", "R", "g", "mu_s", "mu_d"):
+        assert float(getattr(back, f)) == pytest.approx(float(getattr(rod, f)), rel=1e-15), f
+    moved = _rod_of(type(rod), {**p, "mu": 0.4})
+    assert (float(moved.mu_d), float(moved.mu_s)) == pytest.approx((0.4, 0.6), rel=1e-12)
