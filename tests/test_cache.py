@@ -70,6 +70,7 @@ def test_the_command_line_moves_or_switches_off_the_cache(tmp_path):
     from jaxrod.cli import _set_cache, build_parser
 
     before = jax.config.jax_compilation_cache_dir
+    threshold = jax.config.jax_persistent_cache_min_compile_time_secs  # the tests' own (conftest.py)
     try:
         _set_cache(build_parser().parse_args(["--cache-dir", str(tmp_path / "c"), "theory"]))
         assert jax.config.jax_compilation_cache_dir == str(tmp_path / "c")
@@ -77,3 +78,26 @@ def test_the_command_line_moves_or_switches_off_the_cache(tmp_path):
         assert jax.config.jax_compilation_cache_dir is None
     finally:
         _cache.use(before)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", threshold)
+
+
+def test_configure_keeps_a_cache_the_user_set_and_otherwise_writes_every_program(tmp_path):
+    """`configure` (run as jaxrod is imported): a cache folder already set is kept as it is; none
+    set, `JAXROD_CACHE_DIR` names the folder (every program written, however fast it compiled)
+    or switches the cache off."""
+    key, min_key = "jax_compilation_cache_dir", "jax_persistent_cache_min_compile_time_secs"
+    before = (jax.config.jax_compilation_cache_dir, jax.config.jax_persistent_cache_min_compile_time_secs)
+    try:
+        jax.config.update(min_key, 0.5)
+        assert _cache.configure({_cache.ENV: str(tmp_path / "x")}) == before[0]
+        assert jax.config.jax_compilation_cache_dir == before[0]
+        assert jax.config.jax_persistent_cache_min_compile_time_secs == 0.5
+        jax.config.update(key, None)
+        assert _cache.configure({_cache.ENV: "off"}) is None and jax.config.jax_compilation_cache_dir is None
+        assert jax.config.jax_persistent_cache_min_compile_time_secs == 0.5
+        assert _cache.configure({_cache.ENV: str(tmp_path / "x")}) == str(tmp_path / "x")
+        assert jax.config.jax_compilation_cache_dir == str(tmp_path / "x")
+        assert jax.config.jax_persistent_cache_min_compile_time_secs == 0.0
+    finally:
+        jax.config.update(key, before[0])
+        jax.config.update(min_key, before[1])
