@@ -15,10 +15,12 @@ pytest worker) instead of being compiled again.
 A cache the user already set up is kept (`jax_compilation_cache_dir` set before jaxrod is
 imported, e.g. by `JAX_COMPILATION_CACHE_DIR`). Entries are keyed by JAX on the compiled
 program, the compile options, the XLA flags, the backend and the JAX/jaxlib versions, so an
-entry is never used for a different program or another JAX (never stale); JAX writes each
-entry to a temporary file and renames it into place, so processes that share the folder
-(pytest workers, the processes of `jax.distributed`, of which only process 0 writes) never
-read a half-written one. JAX never caches a program that calls back to Python while it runs
+entry is never used for a different program or another JAX (never stale). JAX (0.10) writes an
+entry in place, without a lock unless `jax_compilation_cache_max_size` is set: a process that
+shares the folder (pytest workers, the processes of `jax.distributed`, of which only process 0
+writes) and reads an entry while another writes it gets a truncated, compressed entry, which
+fails to decompress; JAX warns ("Error reading persistent compilation cache entry") and compiles
+the program itself — time lost, never a wrong program. JAX never caches a program that calls back to Python while it runs
 (`jax.debug.callback`): in jaxrod only a single run with `RunOptions(progress=True)` (the
 progress bar of `jaxrod simulate --model rod3d`) does; sweeps, maps and searches report
 progress from the host between compiled calls and are cached.
