@@ -24,4 +24,8 @@ jax.config.update("jax_numpy_rank_promotion", "raise")
 # clone (CI) and is not committed.
 jax.config.update("jax_compilation_cache_dir", os.path.join(os.path.dirname(os.path.dirname(__file__)),
                                                             ".pytest_cache", "jax"))
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+# Every program is written, however fast it compiled (threshold 0 s, as jaxrod's own default): at
+# XLA's level 0 most of the tests' programs compile in under 0.2 s (a cold suite leaves 3630 files
+# in the cache at 0 s, 216 at 0.2 s), and each worker compiled those again
+# (benchmarks/results/suite_time_variants.txt, J and K: 319 s against 348 and 395 s).
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
