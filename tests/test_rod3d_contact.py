@@ -129,6 +129,50 @@ def test_one_impulse_moves_the_node_and_spins_its_segments_as_the_material_frame
     np.testing.assert_allclose(ds, [W11 * p1 + W12 * p2, W12 * p1 + W22 * p2], rtol=max(1e-9, 50 * tol))
 
 
+def test_the_converged_pass_leaves_each_contact_stuck_or_slipping_against_its_impulse():
+    """Coulomb's law with maximal dissipation, for many coupled contacts (neighbours share a
+    segment; the segments tilted, so W₁₂ ≠ 0): converged (tolerance 1e-13, μ_s = μ_d), every
+    interior contact either holds its point still (|p| < μN h, slip after ≈ 0) or slides at the
+    bound with its impulse against the slip it leaves (p = −μN h û). The slip is computed here from
+    the returned velocities and spins (as in the test above); normal forces of 0.02–2 N and node
+    speeds of 0.01–3 mm/s make both kinds."""
+    rod = jr.RodChannel.reference(0.3)
+    model = Rod3D(rod, 9, ends="fork", friction_precision="float64", friction_tol=1e-13, friction_sweeps=2000)
+    x, Q, _, v = _state(model, seed=3)
+    rng = np.random.default_rng(4)
+    N = jnp.asarray(np.exp(rng.uniform(np.log(0.02), np.log(2.0), model.n + 1)))
+    table = friction_table(model, x, Q, N)
+    speed = np.exp(rng.uniform(np.log(1e-5), np.log(3e-3), model.n + 1))  # [m/s], node by node
+    v0 = jnp.asarray(rng.normal(0, 1, (model.n + 1, 3)) * speed[:, None])
+    w0 = jnp.asarray(rng.normal(0, 1, (model.n, 3)) * 100 * speed[:-1, None])
+    h = 1e-5
+    v1, w1, _, force, residual, sweeps = jax.jit(
+        lambda t, Q, v, w: friction_pass(model, jr.Coulomb(), t, Q, v, w, jnp.zeros(model.n + 1, bool),
+                                         jnp.zeros((model.n + 1, 2)), h))(table, Q, v0, w0)
+    assert float(residual) <= 1e-13 and 1 < int(sweeps) < 2000
+    W12 = _natural(table, "W12", model.n)
+    assert np.max(np.abs(W12[1:-1])) > 1e-3 * np.max(_natural(table, "W11", model.n))  # coupled
+    v1, w1, Qn, xn = np.asarray(v1), np.asarray(w1), np.asarray(Q), np.asarray(x)
+    r = 0.5 * float(rod.d)
+    kinds = set()
+    for i in range(1, model.n):
+        e1, e2 = xn[i, 1:] / np.hypot(xn[i, 1], xn[i, 2])
+        t1, t2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, -e2, e1])
+        u = [r * np.array([0.0, e2, -e1]), r * t1]
+        slip = np.array([v1[i] @ t1 + sum(0.5 * (w1[j] @ (Qn[j] @ u[0])) for j in (i - 1, i)),
+                         v1[i] @ t2 + sum(0.5 * (w1[j] @ (Qn[j] @ u[1])) for j in (i - 1, i))])
+        p, bound = np.asarray(force[i]) * h, float(rod.mu_d) * float(N[i]) * h
+        if np.hypot(*p) < bound * (1 - 1e-9):  # held
+            kinds.add("stick")
+            assert np.hypot(*slip) < 1e-9 * speed.max(), (i, slip)
+        else:  # at the bound, against the slip
+            kinds.add("slip")
+            assert np.hypot(*p) == pytest.approx(bound, rel=1e-9)
+            cos = (p @ slip) / (np.hypot(*p) * np.hypot(*slip))
+            assert cos == pytest.approx(-1.0, abs=1e-9), (i, cos)
+    assert kinds == {"stick", "slip"}
+
+
 @pytest.mark.slow  # three 3D compilations, ~50 s
 def test_a_float32_pass_moves_a_run_far_less_than_its_time_step_does():
     """The error budget of `friction_precision="float32"`: in the benchmark's case (dead load
