@@ -22,9 +22,9 @@ def safe_hypot(a: Float[Array, "..."], b: Float[Array, "..."]) -> Float[Array, "
     return jnp.where(pos, jnp.sqrt(jnp.where(pos, sq, 1.0)), 0.0)
 
 
-def float_leaf(x, dtype=None):
-    """`x` as an array of `dtype` (default: the default float dtype): a model's physical number."""
-    return jnp.asarray(x, dtype=jnp.result_type(float) if dtype is None else dtype)
+def float_leaf(x):
+    """`x` as an array of the default float dtype: a model's physical number."""
+    return jnp.asarray(x, dtype=jnp.result_type(float))
 
 
 def computed_once(values, ref: Float[Array, "..."]):
