@@ -63,6 +63,8 @@ def test_a_helix_turning_faster_than_the_segments_resolve_is_unresolved():
     out = vd.verdict(PUSH, PUSH, f, helix, l0, r)
     assert out["status"] == vd.UNRESOLVED and out["segments_per_turn"] == pytest.approx(5.0)
     assert out["f_unresolved"] == pytest.approx(4.3)
+    rising = 4.3 + PUSH  # the entry force at the first unresolved save, not at the first save
+    assert vd.verdict(PUSH, PUSH, rising, helix, l0, r)["f_unresolved"] == pytest.approx(4.3 + PUSH[-60])
     assert vd.verdict(PUSH, PUSH, f, straight, l0, r)["status"] == vd.SLIDING
     # a gentle helix, 20 segments per turn at a small angle, is resolved
     gentle = straight.copy()

@@ -126,6 +126,11 @@ def test_stable_zone_static_friction_and_special_cases():
     assert not bool(th.in_stable_zone(0.0, 1.001 * Adcr, k, f))
     assert bool(th.in_stable_zone(0.999 * Acr, 0.0, k, f))
     assert not bool(th.in_stable_zone(1.001 * Acr, 0.0, k, f))
+    # one answer per combination of the arguments, the dynamic amplitude's included: the state
+    # A = 1.5, Ȧ = 0.2 at k = −1 is in the zone only for f = 2 and 4 (Ȧ < λ(a − A) needs
+    # a = f/|k| > 1.7)
+    zone = th.in_stable_zone(1.5, 0.2, -1.0, jnp.array([0.5, 1.0, 2.0, 4.0]), f_static=1.0)
+    assert zone.shape == (4,) and zone.tolist() == [False, False, True, True]
 
 
 def test_stable_zone_boundary_polygon_is_on_the_boundary():
