@@ -632,3 +632,29 @@ def test_a_job_gives_each_lane_its_mu_from_mul_over_ell_at_its_rod_length(tmp_pa
     assert seen == dict(mus=[0.25, 0.5], speed=10e-3)
     job = json.load(open(path))
     assert [lane["X"] for lane in job["lanes"]] == [0.5, 1.0] and job["mu_of_X"] == 0.5
+
+
+def test_a_job_hands_every_setting_to_its_staircase(tmp_path, monkeypatch):
+    """`_job` runs one staircase with the setting's f_c, pushes, stage count, saves per stage and
+    the driver's damping, at the job's speed and its number of segments (8 per buckle wave here,
+    at least 8); the far-load lanes at μ = X/(L/ℓ), the lock-up lane last and varying μ."""
+    import sys
+
+    seen = {}
+
+    class Seen(Exception):
+        pass
+
+    def record(rod, mus, starts, speed, **kw):
+        seen.update(kw, mus=list(mus), starts=list(starts), speed=speed)
+        raise Seen
+
+    monkeypatch.setattr(sys.modules["jaxrod.lockup.staircase"], "staircase", record)
+    S = dict(f_c=4.5, first_push=0.003, stage_push=0.002, max_stages=3, saves_per_stage=7)
+    with pytest.raises(Seen):
+        lx._job(((2.0, (0.5, 1.0), 1.5), (8, 0.02), S, str(tmp_path / "job.json"), False))
+    assert {k: seen[k] for k in S} == S
+    assert seen["damping"] == lx.DAMPING and seen["speed"] == 0.02 and seen["progress"] is False
+    assert seen["mus"] == [0.25, 0.5, 0.75] and seen["vary_mu"] == [False, False, True]
+    assert seen["starts"][2] == 0.0 and min(seen["starts"][:2]) >= 0.1
+    assert seen["n"] == max(8, math.ceil(8 * 2.0 / (2 * math.pi * math.sqrt(lx.R_OVER_ELL))))
