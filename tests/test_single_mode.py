@@ -245,6 +245,9 @@ def test_tanh_tends_to_the_sharp_law_on_short_horizons():
         for solver in (diffrax.Tsit5(), diffrax.Kvaerno5()):
             sol = jr.simulate(model, jr.DiffraxSmooth(jr.Tanh(eps), solver, rtol=1e-9, atol=1e-11), 1.0, 0.0, 1.0, n_save=21)
             errs.append(float(jnp.max(jnp.abs(sol.q - ref.q))))
+            # nothing works on the mode: its energy plus what the smooth law dissipated stays E(0)
+            np.testing.assert_array_equal(np.asarray(sol.work_in), np.zeros(21))
+            assert float(sol.energy_balance_error()) < 1e-6, (eps, solver)
     errs = np.array(errs).reshape(3, 2)
     np.testing.assert_allclose(errs[:, 0], errs[:, 1], rtol=1e-3)  # explicit = implicit
     assert errs[0, 0] > errs[1, 0] > errs[2, 0]

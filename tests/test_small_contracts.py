@@ -111,6 +111,11 @@ def test_rod3d_height_is_zero_resting_on_the_bottom_and_the_lift_above_it(rod3d_
     assert abs(float(model.observables(q, v, a)["height"])) < 1e-12
     lifted = eqx.tree_at(lambda s: s.x, q, q.x.at[3, 2].add(2e-4))
     assert float(model.observables(lifted, v, a)["height"]) == pytest.approx(2e-4, rel=1e-9)
+    # `gap`: the largest distance of a node inside the clearance circle: −sag resting on the wall
+    # (every node sunk into it under its weight), the lift less the sag where one node is lifted
+    sag = float(model.static_sag())
+    assert sag > 0 and float(model.observables(q, v, a)["gap"]) == pytest.approx(-sag, rel=1e-9)
+    assert float(model.observables(lifted, v, a)["gap"]) == pytest.approx(2e-4 - sag, rel=1e-9)
 
 
 # ------------------------------------------------------------------ a swept rod's validity
