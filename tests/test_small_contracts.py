@@ -694,3 +694,13 @@ def test_a_searched_rods_parameters_keep_its_static_excess_over_the_dynamic_coef
         assert float(getattr(back, f)) == pytest.approx(float(getattr(rod, f)), rel=1e-15), f
     moved = _rod_of(type(rod), {**p, "mu": 0.4})
     assert (float(moved.mu_d), float(moved.mu_s)) == pytest.approx((0.4, 0.6), rel=1e-12)
+
+
+def test_a_physical_number_given_as_an_int_is_a_float_leaf_and_an_unknown_result_code_is_named():
+    from jaxrod._numerics import float_leaf
+    from jaxrod._results import RESULTS
+
+    for x in (3, [1, 2], np.int32(7)):
+        assert float_leaf(x).dtype == jnp.dtype("float64")
+    assert RESULTS.describe(99) == "unknown result code 99"
+    assert RESULTS.describe(jnp.asarray(RESULTS.successful)) == RESULTS.messages[RESULTS.successful]
