@@ -20,10 +20,10 @@ entry in place, without a lock unless `jax_compilation_cache_max_size` is set: a
 shares the folder (pytest workers, the processes of `jax.distributed`, of which only process 0
 writes) and reads an entry while another writes it gets a truncated, compressed entry, which
 fails to decompress; JAX warns ("Error reading persistent compilation cache entry") and compiles
-the program itself — time lost, never a wrong program. JAX never caches a program that calls back to Python while it runs
-(`jax.debug.callback`): in jaxrod only a single run with `RunOptions(progress=True)` (the
-progress bar of `jaxrod simulate --model rod3d`) does; sweeps, maps and searches report
-progress from the host between compiled calls and are cached.
+the program itself — time lost, never a wrong program. JAX never caches a program that calls
+back to Python while it runs (`jax.debug.callback`): in jaxrod only a single run with
+`RunOptions(progress=True)` (the progress bar of `jaxrod simulate --model rod3d`) does; sweeps,
+maps and searches report progress from the host between compiled calls and are cached.
 """
 
 from __future__ import annotations

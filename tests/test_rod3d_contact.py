@@ -33,6 +33,17 @@ def _natural(table, name, n):
     return np.stack([np.asarray(even[i]), np.asarray(odd[i])], 1).reshape(-1)[: n + 1]
 
 
+def _slip(i, x, Q, v, w, r):
+    """The tangential velocity (t₁, t₂) of interior node i's contact point [m/s]: the node's
+    velocity plus each of its two segments' half share of ω × r_c (material spins `w`, directors
+    `Q`, arm `r` [m]), from the material-frame formula."""
+    x, Q, v, w = (np.asarray(a) for a in (x, Q, v, w))
+    e1, e2 = x[i, 1:] / np.hypot(x[i, 1], x[i, 2])
+    t1, t2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, -e2, e1])
+    u = [r * np.array([0.0, e2, -e1]), r * t1]
+    return np.array([v[i] @ t + sum(0.5 * (w[j] @ (Q[j] @ ua)) for j in (i - 1, i)) for t, ua in zip((t1, t2), u)])
+
+
 def _reference_W(model, x, Q):
     """W from the material-frame formula, node by node."""
     n = model.n
@@ -122,10 +133,7 @@ def test_one_impulse_moves_the_node_and_spins_its_segments_as_the_material_frame
     np.testing.assert_allclose(np.delete(dw, [i - 1, i], 0), 0.0, atol=1e-15)
     # slip change = W p
     W11, W12, W22 = (_natural(table, k, model.n)[i] for k in ("W11", "W12", "W22"))
-    slip = lambda v, w: np.array([
-        v[i] @ t1 + sum(0.5 * (np.asarray(w)[j] @ (Qn[j] @ u[0])) for j in (i - 1, i)),
-        v[i] @ t2 + sum(0.5 * (np.asarray(w)[j] @ (Qn[j] @ u[1])) for j in (i - 1, i))])
-    ds = slip(np.asarray(v1), w1) - slip(np.asarray(v0), w0)
+    ds = _slip(i, x, Q, v1, w1, r) - _slip(i, x, Q, v0, w0, r)
     np.testing.assert_allclose(ds, [W11 * p1 + W12 * p2, W12 * p1 + W22 * p2], rtol=max(1e-9, 50 * tol))
 
 
@@ -134,7 +142,7 @@ def test_the_converged_pass_leaves_each_contact_stuck_or_slipping_against_its_im
     segment; the segments tilted, so W₁₂ ≠ 0): converged (tolerance 1e-13, μ_s = μ_d), every
     interior contact either holds its point still (|p| < μN h, slip after ≈ 0) or slides at the
     bound with its impulse against the slip it leaves (p = −μN h û). The slip is computed here from
-    the returned velocities and spins (as in the test above); normal forces of 0.02–2 N and node
+    the returned velocities and spins (`_slip`, as in the test above); normal forces of 0.02–2 N and node
     speeds of 0.01–3 mm/s make both kinds."""
     rod = jr.RodChannel.reference(0.3)
     model = Rod3D(rod, 9, ends="fork", friction_precision="float64", friction_tol=1e-13, friction_sweeps=2000)
@@ -152,15 +160,10 @@ def test_the_converged_pass_leaves_each_contact_stuck_or_slipping_against_its_im
     assert float(residual) <= 1e-13 and 1 < int(sweeps) < 2000
     W12 = _natural(table, "W12", model.n)
     assert np.max(np.abs(W12[1:-1])) > 1e-3 * np.max(_natural(table, "W11", model.n))  # coupled
-    v1, w1, Qn, xn = np.asarray(v1), np.asarray(w1), np.asarray(Q), np.asarray(x)
     r = 0.5 * float(rod.d)
     kinds = set()
     for i in range(1, model.n):
-        e1, e2 = xn[i, 1:] / np.hypot(xn[i, 1], xn[i, 2])
-        t1, t2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, -e2, e1])
-        u = [r * np.array([0.0, e2, -e1]), r * t1]
-        slip = np.array([v1[i] @ t1 + sum(0.5 * (w1[j] @ (Qn[j] @ u[0])) for j in (i - 1, i)),
-                         v1[i] @ t2 + sum(0.5 * (w1[j] @ (Qn[j] @ u[1])) for j in (i - 1, i))])
+        slip = _slip(i, x, Q, v1, w1, r)
         p, bound = np.asarray(force[i]) * h, float(rod.mu_d) * float(N[i]) * h
         if np.hypot(*p) < bound * (1 - 1e-9):  # held
             kinds.add("stick")

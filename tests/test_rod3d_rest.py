@@ -135,4 +135,5 @@ def test_the_stick_test_up_the_channel_wall_is_the_test_at_the_bottom_turned():
         np.testing.assert_allclose(np.asarray(e), np.tile([s, -c], (13, 1)), atol=1e-12)  # up the side
         assert bool(m.is_stuck(q, v, m.acceleration(q))) == held, ratio
         bottom = Rod3D(rod, 12, ends="free", body_force=(0.0, ratio * w, 0.0), friction_at="axis")
-        assert bool(bottom.is_stuck(*bottom.initial_state(), bottom.acceleration(bottom.initial_state()[0]))) == held
+        qb, vb = bottom.initial_state()
+        assert bool(bottom.is_stuck(qb, vb, bottom.acceleration(qb))) == held
