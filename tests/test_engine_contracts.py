@@ -251,9 +251,50 @@ def test_galerkin_friction_acceleration_is_the_projected_sliding_friction():
 
 
 def test_the_documented_defaults_of_the_3d_rod_and_the_galerkin_model():
-    """`Rod3D`'s wall is elastic unless asked (contact damping 0: energy conserved at μ = 0);
-    the Galerkin model integrates its friction on max(64, 8·n_modes) midpoints."""
+    """`Rod3D`'s wall is elastic unless asked (contact damping 0: energy conserved at μ = 0) and
+    it has 100 segments unless given; the Galerkin model integrates its friction on
+    max(64, 8·n_modes) midpoints."""
     from jaxrod.models.galerkin import GalerkinModel
 
     assert float(Rod3D(ROD, 4).contact_damping) == 0.0
+    assert Rod3D(ROD).n == 100
     assert [GalerkinModel.from_rod(ROD, k, dF=1.0).n_quad for k in (1, 8, 9, 20)] == [64, 64, 72, 160]
+
+
+class _Seen(Exception):
+    """Raised by a stand-in for a search: what the driver handed it."""
+
+
+def test_a_load_search_without_n_takes_the_nodes_its_perturbation_needs_at_the_largest_load(monkeypatch):
+    """`critical_load` with no `n`/`dt`: the scene's resolution at the bracket's top load under the
+    perturbation searched — 499 field nodes for a random velocity on the scene's noise grid, not the
+    sine's 384 — and its step. (The search is replaced by a stand-in that stops at its first scene.)"""
+    from jaxrod.boundary import search as S
+    from jaxrod.scene import make_perturbation
+
+    def stand_in(scene_of, *args, **kwargs):
+        raise _Seen(scene_of(jnp.asarray(0.0)))
+
+    monkeypatch.setattr(S, "_search", stand_in)
+    probe = lambda p: jr.Scene(ROD, 100.0, make_perturbation(p, 1.0, 6), kind="field")
+    assert probe("random-velocity").size() == 499 and probe("sine").size() == 384
+    for p in ("random-velocity", "sine"):
+        with pytest.raises(_Seen) as seen:
+            jr.boundary.critical_load(ROD, 0.01, perturbation=p, bracket=(0.05, 100.0), sensitivities=())
+        scene = seen.value.args[0]
+        assert (scene.n, scene.dt) == (probe(p).size(), probe(p).step()), p
+
+
+def test_a_curve_searched_at_once_without_n_takes_the_resolution_of_its_largest_load(monkeypatch):
+    """`boundary_curve(continuation=False)` with no `n`/`dt` searches every load with the field
+    nodes and step of the scene at its largest load (one compiled search)."""
+    from jaxrod.boundary import search as S
+
+    def stand_in(rod, dF, **kw):
+        raise _Seen(kw["n"], kw["dt"])
+
+    monkeypatch.setattr(S, "critical_velocity", stand_in)
+    with pytest.raises(_Seen) as seen:
+        jr.boundary.boundary_curve(ROD, [3.0, 40.0, 7.0], continuation=False, sensitivities=())
+    top = jr.Scene(ROD, 40.0, kind="field")
+    assert seen.value.args == (top.size(), top.step()) and top.size() != jr.Scene(ROD, 3.0, kind="field").size()

@@ -131,6 +131,22 @@ def test_e1_with_the_step_given_is_the_run_with_that_fraction_of_the_limit(e1_ti
     np.testing.assert_array_equal(again["reaction"], res["reaction"])
 
 
+def test_e1_runs_stop_once_past_one_radian(monkeypatch):
+    """E1's batch hands every member's run the 1 rad buckling threshold its docstring states (past
+    the force peak) and the scheme asked for. (The run is a stand-in that records what it was
+    handed and stops.)"""
+    seen = {}
+
+    def stand_in(model, q, v, t1, n_save, dt, **kw):
+        seen.update(kw)
+        raise RuntimeError("recorded")
+
+    monkeypatch.setattr(exp3d, "run", stand_in)
+    with pytest.raises(RuntimeError, match="recorded"):
+        exp3d.e1_curves(0.3, (10e-3, 30e-3), n=4, t1=0.01, n_save=11, dt=1e-4, scheme="verlet")
+    assert seen["threshold"] == 1.0 and seen["scheme"] == "verlet" and seen["stop_on_buckle"]
+
+
 # ---------------------------------------------------------------- experiments.rod3d: E6 full model
 
 

@@ -67,6 +67,7 @@ def test_modal_analysis():
     np.testing.assert_allclose(A[6], 0.3, atol=1e-12)
     np.testing.assert_allclose(A[1], 0.1, atol=1e-12)
     assert int(jr.modal.dominant_mode(theta)) == 7
+    assert int(jr.modal.dominant_mode(theta, 6)) == 2  # among the first six modes
     p = jr.modal.modal_spectrum(theta)
     np.testing.assert_allclose(float(p.sum()), 1.0)
     assert float(p[6]) == pytest.approx(0.9, rel=1e-9)

@@ -109,6 +109,57 @@ def test_inject_lanes_runs_its_parts_and_keeps_n_save_saves_in_all(monkeypatch):
         assert rec["F_far"].shape == (3, len(rec["t"]))
 
 
+def _recorded_inject_lanes(monkeypatch, rod, **kw):
+    """What `inject_lanes` hands its phase runner (replaced by a recorder), and its record."""
+    from jaxrod.lockup import push as P
+
+    seen = {}
+
+    def phases(rod, parts, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme="leapfrog"):
+        seen.update(parts=parts, adjust=adjust, q=q)
+        m, saves = np.asarray(q.x).shape[0], 1 + len(parts) * (n_save - 1)
+        return dict(t=np.linspace(0.0, 1.0, saves), phase=np.ones(saves, int), reaction=np.zeros((m, saves, 2)),
+                    F0=1.0)
+
+    monkeypatch.setattr(P, "_phases", phases)
+    rec = P.inject_lanes(rod, [0.5, 0.3, 0.2], [0.0, 1.0, 2.0], 0.01, 2.0, n=12, n_save=21, **kw)
+    return seen, rec
+
+
+def test_the_imperfect_start_is_drawn_from_the_key_and_scaled_to_the_imperfection(monkeypatch):
+    """Every lane starts from one smooth random lateral offset: the one of `key` (default: key 0),
+    its largest value `imperfection` × r along the wall (θ = offset/r)."""
+    rod = push_rod(1.0, 0.02, 0.5)
+    theta = {}
+    for name, kw in (("default", {}), ("0", dict(key=jax.random.key(0))), ("1", dict(key=jax.random.key(1))),
+                     ("big", dict(imperfection=3e-3))):
+        seen, _ = _recorded_inject_lanes(monkeypatch, rod, **kw)
+        x = np.asarray(seen["q"].x)
+        theta[name] = np.arctan2(x[:, :, 1], -x[:, :, 2])
+        np.testing.assert_array_equal(theta[name][1:], np.broadcast_to(theta[name][0], theta[name][1:].shape))
+    np.testing.assert_array_equal(theta["default"], theta["0"])
+    assert np.max(np.abs(theta["1"] - theta["0"])) > 1e-4
+    for name, amp in (("0", 1e-3), ("1", 1e-3), ("big", 3e-3)):
+        assert np.max(np.abs(theta[name])) == pytest.approx(amp, rel=1e-9)
+
+
+def test_a_lane_is_held_once_its_entry_force_passes_the_cap_not_when_it_reaches_it(monkeypatch):
+    """The hold rule between parts: a lane whose largest entry reaction exceeds `cap` F₀ has its
+    entry stopped (speed 0) and `held_from` set to that time, once; a lane exactly at the cap and
+    one below it push on."""
+    rod = push_rod(1.0, 0.02, 0.5)
+    F0, _ = units(rod)
+    seen, rec = _recorded_inject_lanes(monkeypatch, rod, cap=2.0)
+    models = seen["parts"][0][0]
+    reaction = np.zeros((3, 13, 2))
+    reaction[0, 5, 1], reaction[1, 7, 1], reaction[2, 3, 1] = 2.0 * F0, 2.0 * F0 * (1 + 1e-9), 1.0 * F0
+    held = seen["adjust"](models, {"reaction": reaction}, 0.4)
+    np.testing.assert_array_equal(np.asarray(held.speed), [0.01, 0.0, 0.01])
+    np.testing.assert_array_equal(rec["held_from"], [np.inf, 0.4, np.inf])
+    seen["adjust"](held, {"reaction": reaction}, 0.8)  # held from its first time over, not the next
+    np.testing.assert_array_equal(rec["held_from"], [np.inf, 0.4, np.inf])
+
+
 def test_a_short_rod_passes_the_pushed_force_less_the_friction_of_the_rod():
     """μL/ℓ = 0.1 (L = 0.41 m, far shorter than a buckle: it stays straight up to 3F₀): under an
     entry force rising at 15 F₀/s every interior node slides toward the far end, so the load

@@ -321,6 +321,29 @@ def test_gradients_are_finite_at_zero_slip(law):
     np.testing.assert_allclose(g1, fd, rtol=1e-2)
 
 
+@pytest.mark.parametrize("u", [(0.0, 0.0), (0.1, -0.05), (2.0, 1.0)])
+def test_the_vector_coulomb_impulse_has_its_derivative_in_both_modes_also_at_zero_slip(u):
+    """dp/du of `Coulomb.impulse_2d`: −W⁻¹ while the contact sticks, at zero slip too (where the
+    slip branch, not taken, divides by |u| = 0), in forward and in reverse mode; while it slips,
+    central differences of the impulse."""
+    law = jr.Coulomb()
+    W = (jnp.array(2.0), jnp.array(0.5), jnp.array(1.0))
+
+    def p(u):
+        (p1, p2), _ = law.impulse_2d((u[0], u[1]), W, jnp.array(0.3), jnp.array(0.2))
+        return jnp.stack([p1, p2])
+
+    u = jnp.asarray(u)
+    fwd, rev = np.asarray(jax.jacfwd(p)(u)), np.asarray(jax.jacrev(p)(u))
+    np.testing.assert_allclose(rev, fwd, rtol=1e-12, atol=1e-15)
+    if float(jnp.linalg.norm(np.linalg.solve([[2.0, 0.5], [0.5, 1.0]], u))) <= 0.3:  # |W⁻¹u| within the bound
+        np.testing.assert_allclose(fwd, -np.linalg.inv([[2.0, 0.5], [0.5, 1.0]]), rtol=1e-12)
+    else:
+        h = 1e-6
+        fd = np.stack([(p(u + h * e) - p(u - h * e)) / (2 * h) for e in jnp.eye(2)], -1)
+        np.testing.assert_allclose(fwd, fd, rtol=1e-6, atol=1e-9)
+
+
 def test_vector_coulomb_impulse_minimises_the_kinetic_energy_over_the_disc():
     """`Coulomb.impulse_2d` against an independent reference: the impulse p that minimises the
     kinetic energy after it, ½(u + Wp)ᵀW⁻¹(u + Wp) = const + uᵀp + ½pᵀWp, over the disc
@@ -423,3 +446,26 @@ def test_a_rod_counts_as_stuck_only_when_its_nodes_and_spins_are_at_rest_and_hel
     assert not bool(stop_measures(model, q, spinning, a)[1])
     sliding = eqx.tree_at(lambda s: s.stuck, v, v.stuck.at[3].set(False))
     assert not bool(stop_measures(model, q, sliding, a)[1])
+
+
+def test_the_initial_lateral_velocity_is_along_the_wall_in_a_channel_and_along_y_without_one():
+    """`initial_state(lateral_velocity=u)`: each interior node moves at u along the wall's tangent,
+    perpendicular to the rod and to the wall's normal (on a rod offset along the wall, not only
+    along y); without a channel, along y. The held ends do not move."""
+    rod = jr.RodChannel.reference(0.3)
+    s = np.arange(13) / 12
+    u = 0.02 * np.sin(np.pi * s)
+    m = Rod3D(rod, 12)
+    q, v = m.initial_state(1.0, lateral_velocity=u, lateral_offset=0.3 * float(rod.R) * np.sin(np.pi * s))
+    x, vv = np.asarray(q.x), np.asarray(v.v)
+    e_r = x[:, 1:] / np.linalg.norm(x[:, 1:], axis=-1, keepdims=True)
+    np.testing.assert_allclose(vv[1:-1, 0], 0.0, atol=1e-15)
+    np.testing.assert_allclose(np.sum(vv[1:-1, 1:] * e_r[1:-1], -1), 0.0, atol=1e-15)
+    np.testing.assert_allclose(np.linalg.norm(vv[1:-1], axis=-1), np.abs(u[1:-1]), rtol=1e-12)
+    assert np.ptp(e_r[1:-1, 0]) > 0.1  # the wall's normal turns along the rod
+    assert not vv[[0, -1]].any()
+    free = Rod3D(rod, 12, channel=False, gravity=False)
+    _, vf = free.initial_state(1.0, lateral_velocity=u)
+    vf = np.asarray(vf.v)
+    np.testing.assert_allclose(vf[1:-1, 1], u[1:-1], rtol=1e-12)
+    np.testing.assert_array_equal(vf[1:-1][:, [0, 2]], 0.0)

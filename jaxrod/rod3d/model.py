@@ -44,7 +44,7 @@ class Rod3D(AbstractModel):
     **Arguments:**
 
     - `rod`: the [`jaxrod.RodChannel`][] (material, section, clearance R, μ_s, μ_d).
-    - `n_segments`: number of segments n ≥ 4 (static).
+    - `n_segments`: number of segments n ≥ 4 (static; default 100).
     - `channel`: with the channel wall (`True`) or a free rod in space (`False`, static).
     - `ends`: `"pinned"` (end nodes held, rotations free: the rod may spin about its axis at
       the ends, so under a high load its interior can roll sideways as a whole), `"fork"` (end
