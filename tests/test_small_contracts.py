@@ -443,6 +443,25 @@ def test_a_lateral_force_adds_its_acceleration_and_two_add_up():
     assert two.rod is m.rod
 
 
+def test_a_lateral_force_keeps_the_velocities_a_users_model_reads():
+    """A user's per-node model whose accelerations read the velocities (here viscous damping, −3v)
+    keeps them under a lateral force: its own accelerations at (q, v) plus the force's."""
+    import dataclasses
+
+    class Damped(jr.FieldModel):
+        def accelerations(self, q, v, t):
+            return super().accelerations(q, v, t) - 3.0 * v
+
+    rod = jr.RodChannel.reference(0.3)
+    base = jr.FieldModel.from_rod(rod, 8, F=2.0)
+    m = Damped(**{f.name: getattr(base, f.name) for f in dataclasses.fields(base) if f.init})
+    q, v = 0.01 * jnp.arange(8.0), jnp.linspace(-0.02, 0.02, 8)
+    f = jnp.linspace(0.1, 0.8, 8)
+    forced = m.under_lateral_force(f).accelerations(q, v, 0.0)
+    expected = np.asarray(base.accelerations(q, v, 0.0)) - 3.0 * np.asarray(v) + np.asarray(f) / float(rod.rho * rod.R)
+    np.testing.assert_allclose(np.asarray(forced), expected, rtol=1e-12)
+
+
 def test_the_3d_rods_tangent_model_runs_its_friction_pass_in_float64_and_is_otherwise_the_same(rod3d_state):
     model, _, _ = rod3d_state
     t = model.for_tangents()
