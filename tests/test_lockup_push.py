@@ -192,7 +192,7 @@ def test_past_the_force_front_a_straight_rod_does_not_move():
 
 
 def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, capsys):
-    """`jaxrod lockup` (`inject`) on a straight case: the entry pushed at 5 mm/s, the far end
+    """`jaxrod lockup` (`inject`) on a straight case: the entry pushed 5 mm at 5 mm/s, the far end
     sliding against F_far = 0.5 F₀, μL/ℓ = 0.5. Once the start's axial wave has been damped
     (mass-proportional damping 20/s; undamped it rings at ±0.65 F₀ about its mean, measured) the
     entry carries the soft-string straight section's F_far + μ_d w L (1 − 1/(2n)) (the held entry
@@ -205,7 +205,7 @@ def test_the_command_writes_the_run_and_its_soft_string_comparison(tmp_path, cap
     from jaxrod.cli import main
 
     out = tmp_path / "lk"
-    assert main(["lockup", "--mu-L", "0.5", "--far-load", "0.5", "--push", "0.01", "--out", str(out), "--json",
+    assert main(["lockup", "--mu-L", "0.5", "--far-load", "0.5", "--push", "0.005", "--out", str(out), "--json",
                  "--quiet", "--unload", "--scheme", "leapfrog"]) == 0
     summary = __import__("json").loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert sorted(p.name for p in out.iterdir()) == ["lockup.csv", "lockup.json", "lockup.png"]

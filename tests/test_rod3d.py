@@ -321,20 +321,25 @@ def test_gradients_are_finite_at_zero_slip(law):
     np.testing.assert_allclose(g1, fd, rtol=1e-2)
 
 
+def _coulomb_impulse(u):
+    """The vector Coulomb impulse for W = [[2, 0.5], [0.5, 1]], stick bound 0.3, slip bound 0.2."""
+    W = (jnp.array(2.0), jnp.array(0.5), jnp.array(1.0))
+    (p1, p2), _ = jr.Coulomb().impulse_2d((u[0], u[1]), W, jnp.array(0.3), jnp.array(0.2))
+    return jnp.stack([p1, p2])
+
+
+_impulse_jacobian_fwd = jax.jit(jax.jacfwd(_coulomb_impulse))
+_impulse_jacobian_rev = jax.jit(jax.jacrev(_coulomb_impulse))
+
+
 @pytest.mark.parametrize("u", [(0.0, 0.0), (0.1, -0.05), (2.0, 1.0)])
 def test_the_vector_coulomb_impulse_has_its_derivative_in_both_modes_also_at_zero_slip(u):
     """dp/du of `Coulomb.impulse_2d`: −W⁻¹ while the contact sticks, at zero slip too (where the
     slip branch, not taken, divides by |u| = 0), in forward and in reverse mode; while it slips,
     central differences of the impulse."""
-    law = jr.Coulomb()
-    W = (jnp.array(2.0), jnp.array(0.5), jnp.array(1.0))
-
-    def p(u):
-        (p1, p2), _ = law.impulse_2d((u[0], u[1]), W, jnp.array(0.3), jnp.array(0.2))
-        return jnp.stack([p1, p2])
-
+    p = _coulomb_impulse
     u = jnp.asarray(u)
-    fwd, rev = np.asarray(jax.jacfwd(p)(u)), np.asarray(jax.jacrev(p)(u))
+    fwd, rev = np.asarray(_impulse_jacobian_fwd(u)), np.asarray(_impulse_jacobian_rev(u))
     np.testing.assert_allclose(rev, fwd, rtol=1e-12, atol=1e-15)
     if float(jnp.linalg.norm(np.linalg.solve([[2.0, 0.5], [0.5, 1.0]], u))) <= 0.3:  # |W⁻¹u| within the bound
         np.testing.assert_allclose(fwd, -np.linalg.inv([[2.0, 0.5], [0.5, 1.0]]), rtol=1e-12)
