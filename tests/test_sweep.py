@@ -548,7 +548,7 @@ def test_a_sweeps_progress_bar_names_the_sweep_and_counts_members(capfd):
 def test_a_resumed_sweeps_bar_says_resumed_until_it_has_run_a_chunk(tmp_path, capfd, monkeypatch):
     """A sweep stopped after its first chunk and run again: while it counts the chunk found on
     disk its bar shows "0.0 members/s (resumed)" (none run yet by this call); once it has run
-    the last chunk, this call's rate alone."""
+    the last chunk, this call's rate alone. The bar counts members, not iterations."""
     monkeypatch.setenv("COLUMNS", "200")  # a bar as wide as a terminal's (not cut at 80 columns)
     spec, inputs, path = SweepSpec(model="mode", t1=0.01, dt=1e-4), {"dF": [1.0, 2.0, 3.0]}, str(tmp_path / "s")
 
@@ -565,6 +565,7 @@ def test_a_resumed_sweeps_bar_says_resumed_until_it_has_run_a_chunk(tmp_path, ca
     lines = [ln.strip() for ln in capfd.readouterr().err.replace("\r", "\n").splitlines() if ln.strip()]
     assert any(ln.endswith(", 0.0 members/s (resumed)]") for ln in lines), lines
     assert "3/3" in lines[-1] and lines[-1].endswith(" members/s]") and "resumed" not in lines[-1]
+    assert lines[0].endswith("0/3 [00:00<?, ?member/s]")  # the bar counts members
 
 
 def test_a_finished_sweep_is_recognised_whatever_order_its_rod_overrides_were_written_in(tmp_path):
