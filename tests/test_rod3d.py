@@ -474,3 +474,16 @@ def test_the_initial_lateral_velocity_is_along_the_wall_in_a_channel_and_along_y
     vf = np.asarray(vf.v)
     np.testing.assert_allclose(vf[1:-1, 1], u[1:-1], rtol=1e-12)
     np.testing.assert_array_equal(vf[1:-1][:, [0, 2]], 0.0)
+
+
+def test_the_3d_sine_perturbation_is_the_scenes_sine_mode_unless_given():
+    """`sine_velocity(model, v₀)`: v₀ sin(mπs/L) at the n + 1 nodes, m the mode of a scene's
+    default sine perturbation (6) unless given."""
+    from jaxrod.rod3d import sine_velocity
+
+    m = Rod3D(jr.RodChannel.reference(0.3), 12)
+    s = np.arange(13) / 12
+    mode = int(jr.Scene(jr.RodChannel.reference(0.3), 5.0).perturbation.mode)
+    assert mode == 6
+    np.testing.assert_allclose(np.asarray(sine_velocity(m, 0.02)), 0.02 * np.sin(mode * np.pi * s), atol=1e-15)
+    np.testing.assert_allclose(np.asarray(sine_velocity(m, 0.02, 3)), 0.02 * np.sin(3 * np.pi * s), atol=1e-15)

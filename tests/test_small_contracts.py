@@ -462,6 +462,31 @@ def test_a_lateral_force_keeps_the_velocities_a_users_model_reads():
     np.testing.assert_allclose(np.asarray(forced), expected, rtol=1e-12)
 
 
+def test_the_projected_verlet_step_hands_friction_the_position_and_forces_of_each_half_step():
+    """A user's model may make its friction depend on where the rod is: `ProjectedVerlet.step` hands
+    `friction_update` the position and accelerations the friction acts at — the step's start for the
+    first half kick, its end (the position and accelerations it returns) for the second."""
+    import dataclasses
+
+    seen = []
+
+    class Recorded(jr.FieldModel):
+        def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
+            seen.append((q, a))
+            return super().friction_update(friction, v_trial, v_prev, h, t, q, a)
+
+    base = jr.FieldModel.from_rod(jr.RodChannel.reference(0.3), 8, F=2.0)
+    m = Recorded(**{f.name: getattr(base, f.name) for f in dataclasses.fields(base) if f.init})
+    q, v = 0.01 * jnp.sin(jnp.arange(1.0, 9.0)), jnp.linspace(-1.0, 1.0, 8)  # sliding [rad/s]
+    a = m.accelerations(q, v, 0.0)
+    q1, _, a1, _ = jr.integrators.ProjectedVerlet(dt=1e-4).step(m, q, v, a, 0.0, 1e-4)
+    assert len(seen) == 2
+    assert seen[0][0] is q and seen[0][1] is a
+    np.testing.assert_array_equal(np.asarray(seen[1][0]), np.asarray(q1))
+    np.testing.assert_array_equal(np.asarray(seen[1][1]), np.asarray(a1))
+    assert not np.array_equal(np.asarray(q1), np.asarray(q))
+
+
 def test_the_3d_rods_tangent_model_runs_its_friction_pass_in_float64_and_is_otherwise_the_same(rod3d_state):
     model, _, _ = rod3d_state
     t = model.for_tangents()
