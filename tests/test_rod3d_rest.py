@@ -137,3 +137,33 @@ def test_the_stick_test_up_the_channel_wall_is_the_test_at_the_bottom_turned():
         bottom = Rod3D(rod, 12, ends="free", body_force=(0.0, ratio * w, 0.0), friction_at="axis")
         qb, vb = bottom.initial_state()
         assert bool(bottom.is_stuck(qb, vb, bottom.acceleration(qb))) == held
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.6])
+def test_torques_that_balance_the_contact_frictions_couples_hold_the_rod_on_the_wall(phi):
+    """`static_equilibrium` with friction at the contact point: a rod resting φ up the channel's
+    side, pushed along its axis (the wall's friction F₁ = p x̂ at each free node, inside the
+    static cone), is held exactly when its segments' torques balance the friction couples
+    r e_r × F (r = d/2, e_r the wall's outward normal; each node's couple shared between its
+    segments as its spin is) — written here as the cross product. Torques of the opposite sign,
+    or none, leave it free to roll."""
+    from jaxrod.rod3d.contact import node_weights, static_equilibrium
+
+    rod = jr.RodChannel.reference(0.5).with_friction(0.5, 0.3)
+    n, c, s = 12, np.cos(phi), np.sin(phi)
+    model = Rod3D(rod, n, ends="free", friction_at="surface")
+    q, _ = model.initial_state()
+    R = jnp.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    q = type(q)(x=q.x @ R.T, Q=q.Q @ R.T)
+    e_r = np.array([0.0, s, -c])  # up the side
+    N = np.full(n + 1, 0.01)  # [N]
+    p = 0.3 * 0.5 * N  # within μ_s N
+    f = np.stack([-p, 0.0 * p, 0.0 * p], -1)  # the push the wall's friction F₁ = p holds
+    C = 0.5 * float(rod.d) * np.cross(e_r, np.stack([p, 0.0 * p, 0.0 * p], -1))  # (n + 1, 3) couples
+    cl, cr = (np.asarray(w) for w in node_weights(model))
+    on_seg = cr[:-1, None] * C[:-1] + cl[1:, None] * C[1:]
+    tau = -np.einsum("kij,kj->ki", np.asarray(q.Q), on_seg)  # material frame
+    for torques, held in ((tau, True), (-tau, False), (0.0 * tau, False)):
+        nodes, segments = static_equilibrium(model, q.x, q.Q, jnp.asarray(f), jnp.asarray(torques), jnp.asarray(N))
+        assert bool(jnp.all(nodes)), phi
+        assert bool(jnp.all(segments)) == held, (phi, held)
