@@ -146,7 +146,7 @@ def test_torques_that_balance_the_contact_frictions_couples_hold_the_rod_on_the_
     static cone), is held exactly when its segments' torques balance the friction couples
     r e_r × F (r = d/2, e_r the wall's outward normal; each node's couple shared between its
     segments as its spin is) — written here as the cross product. Torques of the opposite sign,
-    or none, leave it free to roll."""
+    or none, leave it free to roll; one segment's torque turned leaves that segment alone free."""
     from jaxrod.rod3d.contact import node_weights, static_equilibrium
 
     rod = jr.RodChannel.reference(0.5).with_friction(0.5, 0.3)
@@ -163,7 +163,10 @@ def test_torques_that_balance_the_contact_frictions_couples_hold_the_rod_on_the_
     cl, cr = (np.asarray(w) for w in node_weights(model))
     on_seg = cr[:-1, None] * C[:-1] + cl[1:, None] * C[1:]
     tau = -np.einsum("kij,kj->ki", np.asarray(q.Q), on_seg)  # material frame
-    for torques, held in ((tau, True), (-tau, False), (0.0 * tau, False)):
+    one = tau.copy()
+    one[4] *= -1.0
+    for torques, held in ((tau, np.ones(n, bool)), (-tau, np.zeros(n, bool)), (0.0 * tau, np.zeros(n, bool)),
+                          (one, np.arange(n) != 4)):
         nodes, segments = static_equilibrium(model, q.x, q.Q, jnp.asarray(f), jnp.asarray(torques), jnp.asarray(N))
-        assert bool(jnp.all(nodes)), phi
-        assert bool(jnp.all(segments)) == held, (phi, held)
+        assert nodes.shape == (n + 1,) and bool(jnp.all(nodes)), phi
+        np.testing.assert_array_equal(np.asarray(segments), held, err_msg=str(phi))
