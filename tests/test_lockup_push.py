@@ -84,22 +84,10 @@ def test_inject_lanes_runs_its_parts_and_keeps_n_save_saves_in_all(monkeypatch):
     saves per part such that the record holds `n_save` saves, also when a part gets only its two
     ends (n_save − 1 = chunks); the parts after the first come from the hold rule (`adjust`).
     (`_phases` replaced by a recorder: what is checked is what inject_lanes asks of it.)"""
-    from jaxrod.lockup import push as P
-
-    seen = {}
-
-    def phases(rod, parts, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme="leapfrog"):
-        seen.update(parts=parts, per=n_save, lanes=lanes, adjust=adjust, scheme=scheme, q=q)
-        saves = 1 + len(parts) * (n_save - 1)
-        m = np.asarray(q.x).shape[0]
-        return dict(t=np.linspace(0.0, 1.0, saves), phase=np.ones(saves, int),
-                    reaction=np.zeros((m, saves, 2)), F0=1.0)
-
-    monkeypatch.setattr(P, "_phases", phases)
     rod = push_rod(1.0, 0.02, 0.5)
     for chunks, n_save in ((None, 101), (20, 21), (4, 5), (3, 50)):
         kw = {} if chunks is None else {"chunks": chunks}
-        rec = P.inject_lanes(rod, [0.5, 0.3, 0.2], [0.0, 1.0, 2.0], 0.01, 2.0, n=12, n_save=n_save, **kw)
+        seen, rec = _recorded_inject_lanes(monkeypatch, rod, n_save=n_save, **kw)
         parts = 20 if chunks is None else chunks
         assert len(seen["parts"]) == parts and all(d == pytest.approx(2.0 / parts) for _, d in seen["parts"])
         assert 1 + parts * (seen["per"] - 1) >= n_save and seen["per"] >= 2
@@ -110,20 +98,21 @@ def test_inject_lanes_runs_its_parts_and_keeps_n_save_saves_in_all(monkeypatch):
         assert rec["F_far"].shape == (3, len(rec["t"]))
 
 
-def _recorded_inject_lanes(monkeypatch, rod, **kw):
-    """What `inject_lanes` hands its phase runner (replaced by a recorder), and its record."""
+def _recorded_inject_lanes(monkeypatch, rod, n_save=21, **kw):
+    """What `inject_lanes` hands its phase runner (replaced by a recorder), and its record: three
+    lanes of 12 segments pushed at 10 mm/s for 2 s."""
     from jaxrod.lockup import push as P
 
     seen = {}
 
     def phases(rod, parts, q, v, dt, n_save, progress, lanes=False, adjust=None, scheme="leapfrog"):
-        seen.update(parts=parts, adjust=adjust, q=q)
+        seen.update(parts=parts, per=n_save, lanes=lanes, adjust=adjust, scheme=scheme, q=q)
         m, saves = np.asarray(q.x).shape[0], 1 + len(parts) * (n_save - 1)
         return dict(t=np.linspace(0.0, 1.0, saves), phase=np.ones(saves, int), reaction=np.zeros((m, saves, 2)),
                     F0=1.0)
 
     monkeypatch.setattr(P, "_phases", phases)
-    rec = P.inject_lanes(rod, [0.5, 0.3, 0.2], [0.0, 1.0, 2.0], 0.01, 2.0, n=12, n_save=21, **kw)
+    rec = P.inject_lanes(rod, [0.5, 0.3, 0.2], [0.0, 1.0, 2.0], 0.01, 2.0, n=12, n_save=n_save, **kw)
     return seen, rec
 
 

@@ -321,9 +321,12 @@ def test_gradients_are_finite_at_zero_slip(law):
     np.testing.assert_allclose(g1, fd, rtol=1e-2)
 
 
+_W = np.array([[2.0, 0.5], [0.5, 1.0]])  # the inverse mass of the impulse tests below
+
+
 def _coulomb_impulse(u):
-    """The vector Coulomb impulse for W = [[2, 0.5], [0.5, 1]], stick bound 0.3, slip bound 0.2."""
-    W = (jnp.array(2.0), jnp.array(0.5), jnp.array(1.0))
+    """The vector Coulomb impulse for W = `_W`, stick bound 0.3, slip bound 0.2."""
+    W = (jnp.array(_W[0, 0]), jnp.array(_W[0, 1]), jnp.array(_W[1, 1]))
     (p1, p2), _ = jr.Coulomb().impulse_2d((u[0], u[1]), W, jnp.array(0.3), jnp.array(0.2))
     return jnp.stack([p1, p2])
 
@@ -341,8 +344,8 @@ def test_the_vector_coulomb_impulse_has_its_derivative_in_both_modes_also_at_zer
     u = jnp.asarray(u)
     fwd, rev = np.asarray(_impulse_jacobian_fwd(u)), np.asarray(_impulse_jacobian_rev(u))
     np.testing.assert_allclose(rev, fwd, rtol=1e-12, atol=1e-15)
-    if float(jnp.linalg.norm(np.linalg.solve([[2.0, 0.5], [0.5, 1.0]], u))) <= 0.3:  # |W⁻¹u| within the bound
-        np.testing.assert_allclose(fwd, -np.linalg.inv([[2.0, 0.5], [0.5, 1.0]]), rtol=1e-12)
+    if float(np.linalg.norm(np.linalg.solve(_W, u))) <= 0.3:  # |W⁻¹u| within the bound
+        np.testing.assert_allclose(fwd, -np.linalg.inv(_W), rtol=1e-12)
     else:
         h = 1e-6
         fd = np.stack([(p(u + h * e) - p(u - h * e)) / (2 * h) for e in jnp.eye(2)], -1)

@@ -443,18 +443,23 @@ def test_a_lateral_force_adds_its_acceleration_and_two_add_up():
     assert two.rod is m.rod
 
 
+def _as_subclass(cls, model):
+    """`model` (an equinox module) rebuilt as its subclass `cls`, field by field: a user's variant."""
+    import dataclasses
+
+    return cls(**{f.name: getattr(model, f.name) for f in dataclasses.fields(model) if f.init})
+
+
 def test_a_lateral_force_keeps_the_velocities_a_users_model_reads():
     """A user's per-node model whose accelerations read the velocities (here viscous damping, −3v)
     keeps them under a lateral force: its own accelerations at (q, v) plus the force's."""
-    import dataclasses
-
     class Damped(jr.FieldModel):
         def accelerations(self, q, v, t):
             return super().accelerations(q, v, t) - 3.0 * v
 
     rod = jr.RodChannel.reference(0.3)
     base = jr.FieldModel.from_rod(rod, 8, F=2.0)
-    m = Damped(**{f.name: getattr(base, f.name) for f in dataclasses.fields(base) if f.init})
+    m = _as_subclass(Damped, base)
     q, v = 0.01 * jnp.arange(8.0), jnp.linspace(-0.02, 0.02, 8)
     f = jnp.linspace(0.1, 0.8, 8)
     forced = m.under_lateral_force(f).accelerations(q, v, 0.0)
@@ -466,8 +471,6 @@ def test_the_projected_verlet_step_hands_friction_the_position_and_forces_of_eac
     """A user's model may make its friction depend on where the rod is: `ProjectedVerlet.step` hands
     `friction_update` the position and accelerations the friction acts at — the step's start for the
     first half kick, its end (the position and accelerations it returns) for the second."""
-    import dataclasses
-
     seen = []
 
     class Recorded(jr.FieldModel):
@@ -476,7 +479,7 @@ def test_the_projected_verlet_step_hands_friction_the_position_and_forces_of_eac
             return super().friction_update(friction, v_trial, v_prev, h, t, q, a)
 
     base = jr.FieldModel.from_rod(jr.RodChannel.reference(0.3), 8, F=2.0)
-    m = Recorded(**{f.name: getattr(base, f.name) for f in dataclasses.fields(base) if f.init})
+    m = _as_subclass(Recorded, base)
     q, v = 0.01 * jnp.sin(jnp.arange(1.0, 9.0)), jnp.linspace(-1.0, 1.0, 8)  # sliding [rad/s]
     a = m.accelerations(q, v, 0.0)
     q1, _, a1, _ = jr.integrators.ProjectedVerlet(dt=1e-4).step(m, q, v, a, 0.0, 1e-4)
