@@ -66,14 +66,17 @@ def test_a_second_process_compiles_nothing_and_off_means_off(tmp_path):
 
 
 def test_the_command_line_moves_or_switches_off_the_cache(tmp_path):
-    """`--cache-dir` and `--no-cache` set JAX's cache folder (and reset the cache JAX opened)."""
+    """`--cache-dir` and `--no-cache` set JAX's cache folder (and reset the cache JAX opened); a
+    folder given writes every program, however fast it compiled (`_cache.MIN_COMPILE_SECONDS`)."""
     from jaxrod.cli import _set_cache, build_parser
 
     before = jax.config.jax_compilation_cache_dir
     threshold = jax.config.jax_persistent_cache_min_compile_time_secs  # the tests' own (conftest.py)
     try:
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
         _set_cache(build_parser().parse_args(["--cache-dir", str(tmp_path / "c"), "theory"]))
         assert jax.config.jax_compilation_cache_dir == str(tmp_path / "c")
+        assert jax.config.jax_persistent_cache_min_compile_time_secs == _cache.MIN_COMPILE_SECONDS  # every program
         _set_cache(build_parser().parse_args(["--no-cache", "theory"]))
         assert jax.config.jax_compilation_cache_dir is None
     finally:

@@ -296,6 +296,9 @@ LOCKUP = {
                       "push, far, f_in have shapes (10,), (9,), (10,): expected equal 1D records of at least 10 saves."),
     "push-still": (lambda: verdict.verdict(np.zeros(10), _N, _N),
                    "push goes from 0 to 0 m and does not advance: expected the entry's advance over a loading phase."),
+    "push-back": (lambda: verdict.verdict(np.linspace(2e-3, 1e-3, 10), _N, _N),
+                  "push goes from 0.002 to 0.001 m and does not advance: expected the entry's advance over a loading "
+                  "phase."),
     "push_rod-mu_L": (lambda: push.push_rod(0.0, 0.1, 0.3),
                       "mu_L_over_ell = 0.0 is invalid: expected a finite number > 0."),
     "push_rod-r-slender": (lambda: push.push_rod(1.0, 0.5, 0.3),

@@ -96,3 +96,20 @@ def test_the_models_highest_frequency_is_the_bound_at_the_state_it_is_given():
     assert float(model.max_frequency(pressed)) == float(frequency_bound(model, pressed))
     assert float(model.max_frequency(pressed)) > 1.002 * float(model.max_frequency())  # 0.5 %: shear dominates
     assert float(model.max_frequency()) == float(frequency_bound(model))
+    # the explicit step limit 2/ω_max is taken at the state given, too
+    assert step_limit(model, pressed) == pytest.approx(2.0 / float(frequency_bound(model, pressed)), rel=1e-15)
+    assert step_limit(model, pressed) < step_limit(model) / 1.002
+
+
+@pytest.mark.parametrize("beta", [0.0, 0.1, 0.2, 0.25, 0.5])
+def test_the_implicit_schemes_step_limit_is_explicit_at_beta_0_and_gone_from_a_quarter(beta):
+    """`ImplicitLeapfrog(beta=β)` is stable up to 2/(ω_max √(1 − 4β)) for β < ¼: the explicit
+    leapfrog's limit at β = 0, √(1/0.6) and √5 times it at 0.1 and 0.2; none from β = ¼."""
+    model, _ = _case(12, "channel, compressed")
+    limit = float(jr.ImplicitLeapfrog(1e-6, beta=beta).step_limit(model))
+    explicit = float(jr.ProjectedLeapfrog(1e-6).step_limit(model))
+    assert explicit == pytest.approx(step_limit(model), rel=1e-12)
+    if beta >= 0.25:
+        assert limit == float("inf")
+    else:
+        assert limit == pytest.approx(explicit / np.sqrt(1.0 - 4.0 * beta), rel=1e-12)
