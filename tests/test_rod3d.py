@@ -90,15 +90,17 @@ def test_buckling_threshold_follows_the_control():
     np.testing.assert_allclose(model.axial_force(q.x, q.Q), F0 + 5.0, rtol=1e-9)
 
 
-@pytest.mark.parametrize("control", ["load", "force"])
+@pytest.mark.parametrize("control", ["load", "force", "displacement"])
 def test_closed_form_forces_are_minus_the_energy_gradient(control):
     """The step's forces and torques (written out by hand) against reverse-mode AD of the
     potential, at a state with large rotations (0.3 rad per segment), wall contact, gravity,
-    a body force and, under `control="load"`, the dead end load."""
+    a body force and, under `control="load"`, the dead end load; under `"displacement"`, the
+    far end's sliding load (`far_load`, on node 0)."""
     from jaxrod.rod3d.so3 import skew
 
     rod = jr.RodChannel.reference(0.3)
-    model = Rod3D(rod, 20, control=control, end_load=3.0, body_force=(0.1, 0.2, -0.3))
+    ends = dict(far_load=3.0) if control == "displacement" else dict(end_load=3.0)
+    model = Rod3D(rod, 20, control=control, body_force=(0.1, 0.2, -0.3), **ends)
     q, _ = model.initial_state(2.0, lateral_offset=1e-3 * jnp.sin(3 * jnp.pi * jnp.arange(21.0) / 20))
     rng = np.random.default_rng(1)
     x = q.x + 1e-4 * rng.normal(size=q.x.shape)
