@@ -9,6 +9,14 @@ import os
 # alike. JAX_DISABLE_MOST_OPTIMIZATIONS=0 in the environment compiles the tests as users' programs
 # are compiled (this file is the tests' only).
 os.environ.setdefault("JAX_DISABLE_MOST_OPTIMIZATIONS", "1")
+# XLA's CPU "fusion emitters" (its default code generator for fused kernels) cost about 29 ms per
+# small program at level 0 (an operation run outside jit compiles one per shape and dtype, and
+# the suite compiles thousands); the older emitters 14-18 ms, and the larger programs measured
+# compile as fast and run within 7 % (benchmarks/fusion_emitters.py). The cold suite: 217 and
+# 223 s against 304 s (benchmarks/results/suite_time_variants.txt). Appended to XLA_FLAGS unless
+# set there.
+if "xla_cpu_use_fusion_emitters" not in os.environ.get("XLA_FLAGS", ""):
+    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_cpu_use_fusion_emitters=false").strip()
 
 # JAX reads the variable as it is imported (nothing imports JAX before this file)
 import jax  # noqa: E402

@@ -41,7 +41,8 @@ def departure(root=1.0, rate=50.0):
 def test_newton_counts_every_evaluation_and_ends_with_the_last_point_it_saw(start):
     """x³ = 2 on [1, 2]: `evaluations` is the number of runs of g (the two bracket ends, the
     midpoint for `start="mid"`, one per iteration); `value` and `derivative` are g and g′ at the
-    last point run; the bracket holds the root with g(lo) ≤ 0 < g(hi)."""
+    last point run; the bracket holds the root with g(lo) ≤ 0 ≤ g(hi) (the last point's g is 0 to
+    rounding here, and which end it becomes depends on how XLA fuses x³ − 2: not asserted)."""
     values = []
     g, seen = recorded(lambda x: x**3 - 2.0, values)
     r = bd.safeguarded_newton(g, 1.0, 2.0, rtol=1e-12, start=start)
@@ -52,7 +53,7 @@ def test_newton_counts_every_evaluation_and_ends_with_the_last_point_it_saw(star
     assert float(r.derivative) == pytest.approx(3 * last**2, rel=1e-15)
     g_at = dict(zip(seen, values))
     lo, hi = float(r.lo), float(r.hi)
-    assert g_at[lo] <= 0 < g_at[hi] and lo <= float(r.root) <= hi
+    assert g_at[lo] <= 0 <= g_at[hi] and lo <= float(r.root) <= hi
 
 
 def test_a_coarser_newton_tolerance_stops_sooner_and_still_meets_it():
