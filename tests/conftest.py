@@ -15,8 +15,26 @@ os.environ.setdefault("JAX_DISABLE_MOST_OPTIMIZATIONS", "1")
 # compile as fast and run within 7 % (benchmarks/fusion_emitters.py). The cold suite: 217 and
 # 223 s against 304 s (benchmarks/results/suite_time_variants.txt). Appended to XLA_FLAGS unless
 # set there.
-if "xla_cpu_use_fusion_emitters" not in os.environ.get("XLA_FLAGS", ""):
-    os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_cpu_use_fusion_emitters=false").strip()
+# XLA aborts a process whose XLA_FLAGS names a flag it does not know (older or later versions
+# may not have this one): a child process tries it first, once (the xdist workers and the
+# processes the tests start inherit the outcome).
+_EMITTERS = "--xla_cpu_use_fusion_emitters=false"
+
+
+def _xla_accepts(flag: str) -> bool:
+    import subprocess
+    import sys
+
+    env = dict(os.environ, XLA_FLAGS=f"{os.environ.get('XLA_FLAGS', '')} {flag}".strip(), JAX_PLATFORMS="cpu")
+    probe = "import jax.numpy as jnp; jnp.zeros(1).block_until_ready()"
+    return subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True).returncode == 0
+
+
+if "xla_cpu_use_fusion_emitters" not in os.environ.get("XLA_FLAGS", "") and "JAXROD_TESTS_XLA_DEFAULT" not in os.environ:
+    if _xla_accepts(_EMITTERS):
+        os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {_EMITTERS}".strip()
+    else:
+        os.environ["JAXROD_TESTS_XLA_DEFAULT"] = "1"  # XLA's default emitters, without asking again
 
 # JAX reads the variable as it is imported (nothing imports JAX before this file)
 import jax  # noqa: E402
