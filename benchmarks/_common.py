@@ -28,6 +28,22 @@ def with_devices(flags: str, devices: int | None = None) -> str:
     return f"{flags} --xla_force_host_platform_device_count={devices or os.cpu_count() or 1}".strip()
 
 
+def worker_in_process(script: str, name: str, env: dict, label: str) -> dict:
+    """`worker(name)` of the benchmark `script` (its module name) run in a fresh Python process
+    with the environment `env`: the dict it returns (printed as JSON). `label` names the run in
+    the error that a failed process raises."""
+    import json
+    import subprocess
+    import sys
+
+    here = os.path.dirname(os.path.abspath(__file__))
+    code = f"import sys, json; sys.path.insert(0, {here!r}); import {script} as b; print(json.dumps(b.worker({name!r})))"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    if out.returncode:
+        raise SystemExit(f"{name} ({label}) failed:\n{out.stderr[-2000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def xla_env(condition: str) -> dict:
     """The environment of a benchmark's worker process under XLA's loop option: `shipped` (as
     jaxrod sets it on import; older revisions do not), `on` (set explicitly) or `off`

@@ -21,10 +21,8 @@ Rows go to `benchmarks/results/fusion_emitters[_level0].csv`.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 import time
 
@@ -58,7 +56,7 @@ def worker(name: str) -> dict:
 
 
 def _run(name: str, emitters: bool, level0: bool) -> dict:
-    from _common import xla_env
+    from _common import worker_in_process, xla_env
 
     env = xla_env("shipped")
     env["JAXROD_CACHE_DIR"] = "off"  # every program compiled, none read from an earlier process
@@ -66,12 +64,7 @@ def _run(name: str, emitters: bool, level0: bool) -> dict:
         env["XLA_FLAGS"] = FLAG
     if level0:
         env["JAX_DISABLE_MOST_OPTIMIZATIONS"] = "1"
-    code = (f"import sys, json; sys.path.insert(0, {HERE!r}); import fusion_emitters as b; "
-            f"print(json.dumps(b.worker({name!r})))")
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
-    if out.returncode:
-        raise SystemExit(f"{name} (emitters {'on' if emitters else 'off'}) failed:\n{out.stderr[-2000:]}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return worker_in_process("fusion_emitters", name, env, f"emitters {'on' if emitters else 'off'}")
 
 
 def main():

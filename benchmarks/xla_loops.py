@@ -24,10 +24,8 @@ Rows (seconds of the steady run, compile seconds, both settings) go to
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 import time
 
@@ -86,14 +84,9 @@ def worker(name: str) -> dict:
 
 
 def _run(name: str, on: bool) -> dict:
-    from _common import xla_env
+    from _common import worker_in_process, xla_env
 
-    env = xla_env("shipped" if on else "off")
-    code = f"import sys, json; sys.path.insert(0, {HERE!r}); import xla_loops as b; print(json.dumps(b.worker({name!r})))"
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
-    if out.returncode:
-        raise SystemExit(f"{name} (option {'on' if on else 'off'}) failed:\n{out.stderr[-2000:]}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return worker_in_process("xla_loops", name, xla_env("shipped" if on else "off"), f"option {'on' if on else 'off'}")
 
 
 def main():
