@@ -47,8 +47,11 @@ def worker_in_process(script: str, name: str, env: dict, label: str) -> dict:
 def xla_env(condition: str) -> dict:
     """The environment of a benchmark's worker process under XLA's loop option: `shipped` (as
     jaxrod sets it on import; older revisions do not), `on` (set explicitly) or `off`
-    (`JAXROD_XLA_DEFAULTS=0`). The parent's own `XLA_FLAGS` is not passed on."""
+    (`JAXROD_XLA_DEFAULTS=0`). The parent's own `XLA_FLAGS` is not passed on, and jaxrod's
+    compilation cache is off (`JAXROD_CACHE_DIR=off`): each process compiles every program, none
+    read back from an earlier round's process."""
     env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "JAXROD_XLA_DEFAULTS")}
+    env["JAXROD_CACHE_DIR"] = "off"
     if condition == "on":
         env["XLA_FLAGS"] = XLA_LOOP_OPTION
     elif condition == "off":

@@ -59,7 +59,6 @@ def _run(name: str, emitters: bool, level0: bool) -> dict:
     from _common import worker_in_process, xla_env
 
     env = xla_env("shipped")
-    env["JAXROD_CACHE_DIR"] = "off"  # every program compiled, none read from an earlier process
     if not emitters:
         env["XLA_FLAGS"] = FLAG
     if level0:
