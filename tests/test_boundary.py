@@ -242,3 +242,16 @@ def test_curve_by_continuation_equals_independent_searches():
     # each search's first run at 1.02 x its prediction: 35 runs in all here (measured; 43 when
     # it starts at 2.02 x, the first load's search then taking 13 runs instead of 7)
     assert int(np.sum(along.evaluations)) <= 36
+
+
+def test_label_bisection_seeded_by_the_field_model_finds_the_plain_bisection_root():
+    """`boundary_curve` by label bisection on a model other than the field model (the 3D rod's
+    default) starts at the field model's boundary: on the Galerkin model its bracket overlaps the
+    bracket of a bisection over the whole range, of the same runs, in fewer of them, at two loads
+    searched at once (one compiled search)."""
+    kw = dict(model="galerkin", n=6, method="bisection", rtol=1e-3, bracket=(1e-4, 1.0), sensitivities=())
+    seeded, _ = bd.boundary_curve(ROD, [2.0, 8.0], **kw)
+    plain, _ = bd.boundary_curve(ROD, [2.0, 8.0], continuation=False, **kw)
+    assert np.all(np.asarray(seeded.result) == 0) and np.all(np.asarray(plain.result) == 0)
+    assert np.all(np.asarray(seeded.lo) < np.asarray(plain.hi)) and np.all(np.asarray(plain.lo) < np.asarray(seeded.hi))
+    assert np.all(np.asarray(seeded.evaluations) < np.asarray(plain.evaluations))

@@ -59,6 +59,7 @@ CASES = [
     (["critical-load", "--realizations", "0"], "--realizations"),
     (["critical-load", "--n", "2"], "--n"),
     (["map", "--t1", "0"], "--t1"),
+    (["boundary", "--model", "rod3d", "--t1", "-1"], "--t1"),
     (["map", "--n", "2"], "--n"),
     (["map", "--model", "rod3d", "--n", "3"], "--n"),
     (["map", "--model", "auto", "--mu", "-1"], "--mu"),

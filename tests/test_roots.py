@@ -243,3 +243,68 @@ def test_a_bracket_of_whole_numbers_is_searched_as_floats(finder):
         r = bd.bisection(lambda x: jnp.where(g(x) > 0, 1.0, 0.0), 1, 4, rtol=1e-12)
     assert r.root.dtype == r.lo.dtype == jnp.result_type(float)
     assert int(r.result) == bd.ROOT_RESULTS.converged and float(r.root) == pytest.approx(2 ** (1 / 3), rel=1e-9)
+
+
+def _counted(label):
+    """`label` and a list that records every point it is called at (concrete calls only)."""
+    seen = []
+
+    def g(x):
+        seen.append(float(x))
+        return label(x)
+
+    return g, seen
+
+
+@pytest.mark.parametrize("root, guess", [(1.0, 1.01), (1.0, 3.0), (1.0, 0.2), (5e-3, 1.0)])
+def test_expanding_bisection_brackets_the_root_from_any_guess(root, guess):
+    """From a prediction on either side of the root, near or a decade off: the final bracket holds
+    the root and is within rtol; the evaluations are the labels taken, each one a move or a halving
+    that the algorithm prescribes (by hand: the ends, then squaring steps, then geometric halves)."""
+    g, seen = _counted(lambda x: x > root)
+    with jax.disable_jit():
+        res = bd.expanding_bisection(g, guess, width=0.04, rtol=1e-2, max_iter=60, floor=1e-6, ceiling=1e3)
+    assert int(res.result) == bd.ROOT_RESULTS.converged
+    assert float(res.lo) <= root < float(res.hi) and float(res.hi) - float(res.lo) <= 1e-2 * float(res.hi)
+    assert int(res.evaluations) == len(seen)
+    # the same algorithm by hand
+    lo, hi = guess * 0.96, guess * 1.04
+    b_lo, b_hi, step, ref = lo > root, hi > root, 1.08, [lo, hi]
+    while b_lo == b_hi:
+        if b_lo:
+            hi, lo = lo, max(lo / step, 1e-6)
+            b_lo = lo > root
+            ref.append(lo)
+        else:
+            lo, hi = hi, min(hi * step, 1e3)
+            b_hi = hi > root
+            ref.append(hi)
+        step *= step
+    while hi - lo > 1e-2 * hi:
+        mid = math.sqrt(lo * hi)
+        ref.append(mid)
+        lo, hi = (lo, mid) if mid > root else (mid, hi)
+    np.testing.assert_allclose(seen, ref, rtol=1e-12)
+
+
+def test_expanding_bisection_is_one_call_of_the_label_in_the_program():
+    """The label (a whole simulation for the 3D rod) is traced once, however many it takes."""
+    traces = []
+    f = lambda x: (traces.append(1), x > 0.3)[1]
+    res = jax.jit(lambda x0: bd.expanding_bisection(f, x0, rtol=1e-3, max_iter=40))(0.5)
+    assert len(traces) == 1 and int(res.evaluations) > 5
+    assert float(res.lo) <= 0.3 < float(res.hi)
+
+
+def test_expanding_bisection_reports_failures_in_its_result():
+    """A failed run (NaN) ends the search as nonfinite; a root outside [floor, ceiling] is an
+    invalid bracket (both ends alike at the limit); a cap on the labels is max_iterations."""
+    nan_above = lambda x: jnp.where(x > 1.2, jnp.nan, jnp.where(x > 1.1, 1.0, 0.0))
+    res = bd.expanding_bisection(nan_above, 0.5, rtol=1e-3, max_iter=60, floor=1e-3, ceiling=10.0)
+    assert int(res.result) == bd.ROOT_RESULTS.nonfinite
+    res = bd.expanding_bisection(lambda x: x > 50.0, 1.0, rtol=1e-3, max_iter=60, floor=1e-3, ceiling=10.0)
+    assert int(res.result) == bd.ROOT_RESULTS.invalid_bracket and float(res.hi) == 10.0
+    res = bd.expanding_bisection(lambda x: x > 1e-4, 1.0, rtol=1e-3, max_iter=60, floor=1e-3, ceiling=10.0)
+    assert int(res.result) == bd.ROOT_RESULTS.invalid_bracket and float(res.lo) == pytest.approx(1e-3)
+    res = bd.expanding_bisection(lambda x: x > 0.37, 1.0, rtol=1e-6, max_iter=6, floor=1e-3, ceiling=10.0)
+    assert int(res.result) == bd.ROOT_RESULTS.max_iterations and int(res.evaluations) == 6

@@ -35,6 +35,7 @@ from .roots import ROOT_RESULTS as ROOT_RESULTS
 from .roots import RootResult as RootResult
 from .roots import safeguarded_newton as safeguarded_newton
 from .roots import bisection as bisection
+from .roots import expanding_bisection as expanding_bisection
 from .roots import departure_secant as departure_secant
 from .roots import implicit_sensitivities as implicit_sensitivities
 from .roots import continuation as continuation
@@ -51,4 +52,4 @@ from .search import boundary_curve as boundary_curve
 from .search import critical_load_curve as critical_load_curve
 from .search import METHODS as METHODS
 
-__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'implicit_sensitivities', 'continuation', 'single_mode_indicator', 'rod_indicator', 'run_label', 'crossing_state', 'departure_rate', 'departure_sensitivities', 'smooth_single_mode_indicator', 'METHODS', 'critical_velocity', 'critical_load', 'boundary_curve', 'critical_load_curve']
+__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'expanding_bisection', 'implicit_sensitivities', 'continuation', 'single_mode_indicator', 'rod_indicator', 'run_label', 'crossing_state', 'departure_rate', 'departure_sensitivities', 'smooth_single_mode_indicator', 'METHODS', 'critical_velocity', 'critical_load', 'boundary_curve', 'critical_load_curve']

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
 
-__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'implicit_sensitivities', 'continuation']
+__all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'expanding_bisection', 'implicit_sensitivities', 'continuation']
 
 
 class ROOT_RESULTS:
@@ -284,6 +284,75 @@ def bisection(g, lo, hi, rtol: float = 1e-10, max_iter: int = 200, geometric: bo
         ~valid, ROOT_RESULTS.invalid_bracket,
         jnp.where(ok, ROOT_RESULTS.converged, ROOT_RESULTS.max_iterations))).astype(jnp.int32)
     return RootResult(0.5 * (lo + hi), lo, hi, gx, jnp.nan * gx, (n + 2).astype(jnp.int32), result)
+
+
+def expanding_bisection(g, guess, width: float = 0.04, rtol: float = 1e-2, max_iter: int = 16,
+                        floor: float = 1e-12, ceiling: float = float("inf")) -> RootResult:
+    """Geometric bisection on a label (True above the root) from a first bracket
+    `guess`·(1 ∓ `width`) around a prediction: while its two ends agree the bracket moves toward
+    the root, widened by a factor that squares at every move (1 + 2`width`, then its square, …)
+    and clipped to [`floor`, `ceiling`]; once they differ it is bisected geometrically until
+    hi − lo ≤ `rtol`·hi. One label per iteration, `max_iter` labels in all (the first two
+    included), and `g` is called at one place in the program (a loop whose first two iterations
+    label the bracket's ends): a label that is a whole simulation compiles once, not three times
+    as with [`jaxrod.boundary.bisection`][]. Where the prediction is good (the 3D rod's v₀*
+    within a few percent of the field model's) a 1 % bracket costs 5–6 labels instead of the 13 of
+    a bisection over decades.
+
+    **Returns:** a `RootResult` (`evaluations` counts the labels): `converged`;
+    `invalid_bracket` when the bracket reached `floor` or `ceiling` with both ends alike;
+    `max_iterations`; `nonfinite` when a label is NaN (a failed run: nothing is known of its side)."""
+    dtype = jnp.result_type(float)
+
+    def label(x):
+        y = jnp.asarray(g(x))
+        return jnp.where(y, 1.0, 0.0).astype(dtype) if y.dtype == bool else (y > 0).astype(dtype) + 0 * y
+
+    guess = jnp.asarray(guess, dtype)
+    floor, ceiling = jnp.asarray(floor, dtype), jnp.asarray(ceiling, dtype)
+    lo = jnp.clip(guess * (1 - width), floor, ceiling)
+    hi = jnp.clip(guess * (1 + width), floor, ceiling)
+
+    def bracketed(s):
+        return (s[5] >= 2) & (s[2] == 0) & (s[3] == 1)
+
+    def at_limit(s):  # both ends alike, and the bracket cannot move further that way
+        lo, hi, g_lo, g_hi, _, n = s
+        return (n >= 2) & (((g_lo == 1) & (g_hi == 1) & (lo <= floor)) | ((g_lo == 0) & (g_hi == 0) & (hi >= ceiling)))
+
+    def narrow(s):
+        return bracketed(s) & (s[1] - s[0] <= rtol * s[1])
+
+    def cond(s):
+        finite = jnp.isfinite(s[2]) & jnp.isfinite(s[3])
+        return finite & ~narrow(s) & ~at_limit(s) & (s[5] < max_iter)
+
+    def body(s):
+        lo, hi, g_lo, g_hi, step, n = s
+        inside = bracketed(s)
+        below = g_lo == 1  # both ends buckled: the root lies below lo
+        moved = jnp.where(below, jnp.maximum(lo / step, floor), jnp.minimum(hi * step, ceiling))
+        x = jnp.where(n == 0, lo, jnp.where(n == 1, hi, jnp.where(inside, jnp.sqrt(lo * hi), moved)))
+        gx = label(x)
+        first = n < 2  # the ends themselves
+        # inside: x replaces the end of its label; outside: the bracket moves to [x, lo] or [hi, x]
+        new = (jnp.where(inside, jnp.where(gx == 0, x, lo), jnp.where(below, x, hi)),
+               jnp.where(inside, jnp.where(gx == 0, hi, x), jnp.where(below, lo, x)),
+               jnp.where(inside, jnp.where(gx == 0, gx, g_lo), jnp.where(below, gx, g_hi)),
+               jnp.where(inside, jnp.where(gx == 0, g_hi, gx), jnp.where(below, g_lo, gx)))
+        ends = (lo, hi, jnp.where(n == 0, gx, g_lo), jnp.where(n == 1, gx, g_hi))
+        out = tuple(jnp.where(first, a, b) for a, b in zip(ends, new))
+        return out + (jnp.where(inside | first, step, step * step), n + 1)
+
+    zero = jnp.zeros((), dtype)
+    s0 = (lo, hi, zero, zero, jnp.asarray(1 + 2 * width, dtype), jnp.array(0))
+    lo, hi, g_lo, g_hi, _, n = s = jax.lax.while_loop(lambda s: (s[5] < 2) | cond(s), body, s0)
+    finite = jnp.isfinite(g_lo) & jnp.isfinite(g_hi)
+    result = jnp.where(~finite, ROOT_RESULTS.nonfinite, jnp.where(
+        narrow(s), ROOT_RESULTS.converged, jnp.where(at_limit(s), ROOT_RESULTS.invalid_bracket,
+                                                     ROOT_RESULTS.max_iterations))).astype(jnp.int32)
+    return RootResult(jnp.sqrt(lo * hi), lo, hi, jnp.where(finite, g_hi, jnp.nan), jnp.nan * g_hi,
+                      n.astype(jnp.int32), result)
 
 
 def implicit_sensitivities(g2: Callable, x_root, params: dict) -> dict:

@@ -55,6 +55,8 @@ def _check_map(args) -> None:
 
 def _check_boundary(args) -> None:
     check_mu(args)
+    if args.t1 is not None:
+        _positive("--t1", args.t1, "s")
     if np.any(args.dF <= 0):
         _fail("argument --dF: loads above F0_6 must be > 0 N for a boundary to exist.")
 

@@ -23,14 +23,23 @@ def _cmd_boundary(args) -> int:
     from ..boundary import ROOT_RESULTS
     from ..stability_map import fit_power_law, theory_boundary
 
-    rod = _rod_from_args(args, args.mu)  # --mu, --dF, --n and --method were checked by cli._checks
+    from ..registry import model_class
+
+    rod = _rod_from_args(args, args.mu)  # --mu, --dF, --n, --t1 and --method were checked by cli._checks
+    # the sensitivities come with the departure rate's tangent runs; label bisection (the 3D rod)
+    # would need a forward-mode run more per load, which compiles longer than the search: opt-in
+    by_labels = (args.method or model_class(args.model).search_method) == "bisection"
+    wanted = ("mu", "dF") if args.sensitivities or not by_labels else ()
     try:
         res, sens = bd.boundary_curve(rod, args.dF, model=args.model, n=args.n, bracket=(1e-5, 2.0), rtol=args.rtol,
-                                      method=args.method, progress=not (args.quiet or args.json))
+                                      t1=args.t1, method=args.method, progress=not (args.quiet or args.json),
+                                      sensitivities=wanted)
     except ValueError as err:
         _fail(str(err))
     v = np.asarray(res.root)
     ok = np.asarray(res.result) == 0
+    nan = np.full(v.shape, math.nan)
+    sens = {k: sens.get(k, nan) for k in ("mu", "dF")}
     rows = [dict(dF=float(f), v0_star=float(x) if o else None, evaluations=int(e), result=ROOT_RESULTS.messages[int(r)],
                  dv0_dmu=float(sm), dv0_ddF=float(sf))
             for f, x, e, r, o, sm, sf in zip(args.dF, v, np.asarray(res.evaluations), np.asarray(res.result), ok,
@@ -115,6 +124,10 @@ def register_boundary(sub) -> None:
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     bd.add_argument("--n", type=_positive_int, default=None)
     bd.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
+    bd.add_argument("--t1", type=_finite_float, default=None,
+                    help="horizon of a run [s] (default: the model's, 2 s; rod3d 0.4 s)")
+    bd.add_argument("--sensitivities", action="store_true",
+                    help="also dv0*/dmu and dv0*/ddF with label bisection (rod3d): one tangent run more per load")
     bd.add_argument("--out", default=None, help="folder for boundary.csv and boundary.png")
     bd.add_argument("--method", choices=["departure", "bisection"], default=None,
                     help="rod models: departure-rate secant (default) or label bisection (default for rod3d)")

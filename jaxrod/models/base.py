@@ -5,6 +5,7 @@ reduced models is in [`jaxrod.models.dof.AbstractDOFModel`][]."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import ClassVar
 
 import abc
 
@@ -164,6 +165,9 @@ class AbstractModel(eqx.Module):
     # how a boundary search finds its root: `"exact"` (the closed form, sine perturbations),
     # `"departure"` (the departure rate) or `"bisection"` (on the label)
     search_method: eqx.AbstractClassVar[str]
+    # the horizon of a search's runs [s]: a run that neither sticks nor buckles by then counts as
+    # stable (the default of `critical_velocity`, `critical_load` and the curves; not abstract)
+    search_horizon: ClassVar[float] = 2.0
     # lanes of a sweep's continuous batch (`jaxrod.sweep`; `None`: the batching default)
     sweep_lanes: eqx.AbstractClassVar[int | None]
 
