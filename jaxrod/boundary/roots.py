@@ -295,9 +295,9 @@ def expanding_bisection(g, guess, width: float = 0.04, rtol: float = 1e-2, max_i
     hi − lo ≤ `rtol`·hi. One label per iteration, `max_iter` labels in all (the first two
     included), and `g` is called at one place in the program (a loop whose first two iterations
     label the bracket's ends): a label that is a whole simulation compiles once, not three times
-    as with [`jaxrod.boundary.bisection`][]. Where the prediction is good (the 3D rod's v₀*
-    within a few percent of the field model's) a 1 % bracket costs 5–6 labels instead of the 13 of
-    a bisection over decades.
+    as with [`jaxrod.boundary.bisection`][]. From a good prediction a narrow bracket takes a few
+    labels, against the dozen of a bisection over decades (benchmarks/README.md, "the user's
+    boundary command").
 
     **Returns:** a `RootResult` (`evaluations` counts the labels): `converged`;
     `invalid_bracket` when the bracket reached `floor` or `ceiling` with both ends alike;

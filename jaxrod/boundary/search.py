@@ -307,9 +307,9 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
     default), each load is predicted by the field model's boundary (its departure search, to
     1e-4) and bisected from a bracket of ±`width` around it, moved and widened while its ends
     agree ([`jaxrod.boundary.expanding_bisection`][], inside `bracket`): the 3D rod's v₀* lies
-    within 1–5 % of the field model's at μ = 0.3 (docs/rod3d.md), so a 1 % bracket costs 5–6
-    runs instead of the 13 of a bisection over `bracket`. One compiled search serves every load
-    (the resolution of the largest). Otherwise all loads are searched at once, one vmapped,
+    near the field model's (docs/rod3d.md), so a narrow bracket takes a few runs where a bisection
+    over `bracket` takes a dozen. One compiled search serves every load (the resolution of the
+    largest); the loads run on the local devices at once, one per device. Otherwise all loads are searched at once, one vmapped,
     jitted search over the whole `bracket` at the resolution of the largest load.
 
     `t1`: the horizon of a run [s] (a run that neither sticks nor buckles by then is stable);
