@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-__all__ = ["block_tridiagonal_solve", "block_tridiagonal_matvec"]
+__all__ = ["block_tridiagonal_solve", "block_tridiagonal_matvec", "block_tridiagonal_factor", "block_tridiagonal_factor_solve"]
 
 
 def _cholesky(S, m: int):
@@ -81,3 +81,48 @@ def block_tridiagonal_matvec(D: Float[Array, "nb m m"], U: Float[Array, "nb1 m m
     out = jnp.einsum("kij,kj->ki", D, x)
     out = out.at[:-1].add(jnp.einsum("kij,kj->ki", U, x[1:]))
     return out.at[1:].add(jnp.einsum("kji,kj->ki", U, x[:-1]))
+
+
+def block_tridiagonal_factor(D: Float[Array, "nb m m"], U: Float[Array, "nb1 m m"]):
+    """The block Thomas factorisation of `block_tridiagonal_solve`, kept for many right-hand
+    sides: the inverses Sₖ⁻¹ of the pivot blocks Sₖ = Dₖ − Uₖ₋₁ᵀ Sₖ₋₁⁻¹ Uₖ₋₁ and Cₖ = Sₖ⁻¹Uₖ
+    ((nb, m, m) each; NaN where A is not positive definite). `block_tridiagonal_factor_solve`
+    then costs two scans of m×m products."""
+    m = D.shape[-1]
+    zero = jnp.zeros((1, m, m), D.dtype)
+    Uk = jnp.concatenate([U, zero])
+    Lk = jnp.concatenate([zero, jnp.swapaxes(U, -1, -2)])
+    eye = jnp.eye(m, dtype=D.dtype)
+
+    def forward(C_prev, inp):
+        Dk, Lo, Up = inp
+        S = Dk - Lo @ C_prev
+        sol = _cholesky_solve(_cholesky(S, m), jnp.concatenate([Up, eye], 1), m)
+        C, Sinv = sol[:, :m], sol[:, m:]
+        return C, (Sinv, C)
+
+    _, (Sinv, C) = jax.lax.scan(forward, jnp.zeros((m, m), D.dtype), (D, Lk, Uk))
+    return Sinv, C
+
+
+def block_tridiagonal_factor_solve(factor, U: Float[Array, "nb1 m m"], b: Float[Array, "nb m"]) -> Float[Array, "nb m"]:
+    """x with A x = b from A's factorisation `factor` (`block_tridiagonal_factor`) and its blocks
+    above the diagonal `U`."""
+    Sinv, C = factor
+    m = b.shape[-1]
+    Lk = jnp.concatenate([jnp.zeros((1, m, m), b.dtype), jnp.swapaxes(U, -1, -2)])
+
+    def forward(y_prev, inp):
+        Si, Lo, bk = inp
+        y = Si @ (bk - Lo @ y_prev)
+        return y, y
+
+    _, y = jax.lax.scan(forward, jnp.zeros(m, b.dtype), (Sinv, Lk, b))
+
+    def backward(x_next, inp):
+        Ck, yk = inp
+        x = yk - Ck @ x_next
+        return x, x
+
+    _, x = jax.lax.scan(backward, jnp.zeros(m, b.dtype), (C, y), reverse=True)
+    return x

@@ -45,12 +45,21 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
 
     beta: float = eqx.field(static=True, default=0.25)
     gamma: float = eqx.field(static=True, default=0.1)
+    coupled: bool = eqx.field(static=True, default=False)
 
     def __check_init__(self):
         if not (isinstance(self.beta, (int, float)) and 0.0 <= self.beta <= 1.0):
             raise ValueError(f"ImplicitLeapfrog.beta = {self.beta!r} is invalid: expected a float in [0, 1].")
         if not (isinstance(self.gamma, (int, float)) and 0.0 <= self.gamma < float("inf")):
             raise ValueError(f"ImplicitLeapfrog.gamma = {self.gamma!r} is invalid: expected a finite float >= 0.")
+
+    def kick_and_friction(self, model, q, v, a, hk, h, t):
+        """With `coupled`, the kick and the friction solved together on the step's operator
+        (`model.coupled_kick`, `jaxrod.rod3d.coupled`); else the kick, then the friction pass."""
+        if not self.coupled:
+            return super().kick_and_friction(model, q, v, a, hk, h, t)
+        v_new, v_trial, impulse = model.coupled_kick(q, v, a, hk, h, self.beta, self.gamma)
+        return v_trial, v_new, (impulse if self.gamma else None)
 
     def kick(self, model, q, v, a, hk, h):
         if not hasattr(model, "implicit_kick"):

@@ -52,8 +52,7 @@ class ProjectedLeapfrog(AbstractProjected):
         if at_position is not None:
             hk = jnp.where(at_position, jnp.where(t > 0, 0.5 * h_save, jnp.zeros_like(hk)), hk)
         h_kick = jnp.where(at_position, h_save, h) if at_position is not None else h
-        v_trial, aux = self.kick_with_aux(model, q, v, a, hk, h_kick)
-        v_new = model.friction_update(self.friction, v_trial, v, hk, t, q, a)
+        v_trial, v_new, aux = self.kick_and_friction(model, q, v, a, hk, h_kick, t)
         lost, work_in = model.impulse_work(v, v_trial, v_new, a, hk)
         lost = self.kick_loss(model, v, v_new, aux, lost)
         v_run = v_new
@@ -68,6 +67,12 @@ class ProjectedLeapfrog(AbstractProjected):
             return q, v_run, a, (lost, work_in)
         v_at = jax.tree_util.tree_map(lambda new, old: jnp.where(t > 0, new, old), v_new, v)
         return q, v_run, a, (lost, work_in), v_at
+
+    def kick_and_friction(self, model, q, v, a, hk, h, t):
+        """`(v_trial, v_new, aux)`: the kick of `hk` in a step of `h` (`kick_with_aux`) and the
+        friction pass after it (`model.friction_update`)."""
+        v_trial, aux = self.kick_with_aux(model, q, v, a, hk, h)
+        return v_trial, model.friction_update(self.friction, v_trial, v, hk, t, q, a), aux
 
     def kick(self, model, q, v, a, hk, h):
         """The kick of `hk` [s] in a step of `h` [s]: `model.kick` (explicit, f/m)."""

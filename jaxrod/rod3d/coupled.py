@@ -1,0 +1,160 @@
+r"""The implicit kick and the wall friction solved together, on the operator the step applies
+(Moreau–Jean time stepping): the friction impulses p of a step satisfy the Coulomb law at the
+velocities they produce *through the coupled system*,
+
+    (M + βh²H + γh²H_d) Δv = hk (f, τ − ω × Jω) − γ h hk H_d v + Gᵀp,
+    u = G (v + Δv):  ‖pᵢ‖ ≤ bᵢ where uᵢ = 0 (stick),  pᵢ = −bᵢ uᵢ/‖uᵢ‖ where uᵢ ≠ 0 (slip),
+
+with bᵢ = hk μ_s Nᵢ for a contact that was stuck and hk μ_d Nᵢ otherwise, and G the contacts'
+tangent Jacobian: the slip of node i's contact point is t_a·vᵢ + Σ_seg c r (Q û_a)·w_seg over
+its two segments (the arms of `jaxrod.rod3d.contact`). The local friction pass
+(`jaxrod.rod3d.contact.friction_pass`) instead sizes each impulse with the contact's own mass
+and applies it through M⁻¹ after the kick: near a contact whose neighbours are held by the stiff
+springs, it holds forces far above μ_s N, and at large steps the impulses it applies excite the
+stiff axial and bending modes that the next kick does not damp.
+
+The velocity form is the convex problem  min_v ½‖v − v*‖²_A + Σ bᵢ ‖Gᵢ v‖, solved by ADMM on
+zᵢ = Gᵢ v (`_admm`): each iteration one solve with the factor of A + Σρᵢ GᵢᵀGᵢ, which is block
+tridiagonal like A (a contact couples node i with segments i − 1 and i), so the step factors one
+matrix, as the kick alone does; the z update is the exact shrinkage (z = 0 inside the cone: the
+stick set), the multipliers are the impulses (p = −λ), warm-started from the last step's forces.
+ρᵢ = the geometric mean of the contact's own-mass and stiffness-diagonal effective masses.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from .._banded import block_tridiagonal_factor, block_tridiagonal_factor_solve
+from . import components as c3
+from .contact import _arm, node_weights
+from .energy import _penetration
+from .hessian import DAMPED, _assembled, _block_masses, _blocks_of, _component_matvec, _free, _stacked
+from .state import Rod3DVelocity
+
+__all__ = ["coupled_kick"]
+
+
+def _contact_rows(model, q, s):
+    """Each node's contact rows in the scaled block coordinates: `a` (n + 1, 2, 6) on its own
+    block (translation, spin of its right segment) and `b` (n + 1, 2, 3) on the spin of its left
+    segment (block i − 1), and the unscaled rows `T`, `R`, `L` to read a slip from velocities."""
+    dtype = q.x.dtype
+    _, (_, e1, e2) = _penetration(model, c3.unpack(q.x))
+    zero, one = jnp.zeros_like(e1), jnp.ones_like(e1)
+    T = jnp.stack([jnp.stack([one, zero, zero], -1), jnp.stack([zero, -e2, e1], -1)], 1)  # t₁ = x̂, t₂ = x̂ × e_r
+    Uh = jnp.stack([jnp.stack([zero, e2, -e1], -1), jnp.stack([one, zero, zero], -1)], 1)  # û₁ = e_r × x̂, û₂ = x̂
+    r = _arm(model, dtype)
+    cl, cr = (c.astype(dtype) for c in node_weights(model))
+    pad = jnp.zeros((1, 3, 3), dtype)
+    Q_right = jnp.concatenate([q.Q, pad])  # node i's right segment i
+    Q_left = jnp.concatenate([pad, q.Q])  # node i's left segment i − 1
+    R = (cr * r)[:, None, None] * jnp.einsum("kij,kaj->kai", Q_right, Uh)
+    L = (cl * r)[:, None, None] * jnp.einsum("kij,kaj->kai", Q_left, Uh)
+    s_left = jnp.concatenate([jnp.zeros((1, 3), dtype), s[:-1, 3:]])
+    a = jnp.concatenate([T * s[:, None, :3], R * s[:, None, 3:]], -1)
+    b = L * s_left[:, None, :]
+    return a, b, T, R, L
+
+
+def _apply_rows_t(a, b, g):
+    """Gᵀg by blocks (n + 1, 6) for per-contact values g (n + 1, 2)."""
+    own = jnp.einsum("kai,ka->ki", a, g)
+    left = jnp.einsum("kai,ka->ki", b, g)  # onto block i − 1's spin
+    return own.at[:-1, 3:].add(left[1:])
+
+
+def _apply_rows(a, b, y):
+    """G y (n + 1, 2) for a block vector y (n + 1, 6)."""
+    y_left = jnp.concatenate([jnp.zeros((1, 3), y.dtype), y[:-1, 3:]])
+    return jnp.einsum("kai,ki->ka", a, y) + jnp.einsum("kai,ki->ka", b, y_left)
+
+
+def _shrink(w, radius):
+    """The proximal map of radius·‖·‖ at w (n + 1, 2): w (1 − radius/‖w‖)⁺, exactly 0 inside."""
+    norm = jnp.sqrt(jnp.sum(w * w, -1))
+    k = jnp.where(norm > radius, 1.0 - radius / jnp.where(norm > 0, norm, 1.0), 0.0)
+    return w * k[:, None]
+
+
+def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter: int = 200, tol: float = 1e-6):
+    """The implicit kick of `hk` [s] in a step of `h` [s] with the wall friction solved on the
+    coupled operator (module docstring). **Returns:** `(v_new, v_trial, impulse)`: the velocity
+    after kick and friction (its `stuck`, `force` [N], `residual` and `sweeps`: the ADMM's last
+    relative change and iterations), `v_trial` = v_new − M⁻¹Gᵀp (what `impulse_work` reads the
+    friction impulse from) and the damping's impulse by blocks (as `implicit_kick`'s)."""
+    dtype = v.v.dtype
+    D, U = _stacked(*_assembled(model, q.x, q.Q, tuple(beta + gamma * d for d in DAMPED), beta))
+    free = _free(model, dtype)
+    s = free / jnp.sqrt(_block_masses(model, dtype))
+    c = h * h
+    A_D = c * (s[:, :, None] * D * s[:, None, :]) + jnp.eye(6, dtype=dtype)[None]
+    A_U = c * (s[:-1, :, None] * U * s[1:, None, :])
+    gyro = c3.pack(c3.gyroscopic(c3.unpack(model.inertia), c3.unpack(v.w)))
+    torque = jnp.concatenate([a.tau - gyro, jnp.zeros((1, 3), dtype)])
+    rhs = hk * s * jnp.concatenate([a.f, torque], -1)
+    vel = jnp.where(s > 0, _blocks_of(v), 0.0)
+    if gamma:
+        Hd = _assembled(model, q.x, q.Q, DAMPED, 0.0)
+        rhs = rhs - gamma * h * hk * s * _component_matvec(*Hd, vel)
+
+    # the contacts
+    ga, gb, T, R, L = _contact_rows(model, q, s)
+    w_left = jnp.concatenate([jnp.zeros((1, 3), dtype), v.w])
+    w_right = jnp.concatenate([v.w, jnp.zeros((1, 3), dtype)])
+    u0 = jnp.einsum("kai,ki->ka", T, v.v) + jnp.einsum("kai,ki->ka", R, w_right) + jnp.einsum("kai,ki->ka", L, w_left)
+    reach = jnp.sum(ga * ga, (1, 2)) + jnp.sum(gb * gb, (1, 2))  # tr(G M⁻¹ Gᵀ)
+    diagA = jnp.diagonal(A_D, axis1=-2, axis2=-1)
+    diag_left = jnp.concatenate([jnp.ones((1, 3), dtype), diagA[:-1, 3:]])
+    reach_A = jnp.sum(ga * ga / diagA[:, None, :], (1, 2)) + jnp.sum(gb * gb / diag_left[:, None, :], (1, 2))
+    N = a.N
+    active = (N > 0) & (reach > 0) & bool(model.channel)
+    rho = jnp.where(active, 2.0 / jnp.sqrt(jnp.where(active, reach * reach_A, 1.0)), 0.0)
+    bound = hk * jnp.where(v.stuck, model.rod.mu_s, model.rod.mu_d) * N
+    bound = jnp.where(active, bound, 0.0)
+
+    K_own = rho[:, None, None] * jnp.einsum("kai,kaj->kij", ga, ga)
+    K_left = rho[:, None, None] * jnp.einsum("kai,kaj->kij", gb, gb)
+    K_cross = rho[:, None, None] * jnp.einsum("kai,kaj->kij", gb, ga)  # (left spin of block i − 1) × block i
+    A_D = (A_D + K_own).at[:-1, 3:, 3:].add(K_left[1:])
+    A_U = A_U.at[:, 3:, :].add(K_cross[1:])
+    factor = block_tridiagonal_factor(A_D, A_U)
+
+    safe_rho = jnp.where(active, rho, 1.0)
+    lam0 = jnp.where(active[:, None], -v.force * hk, 0.0)
+    norm0 = jnp.sqrt(jnp.sum(lam0 * lam0, -1))
+    lam0 = lam0 * jnp.where(norm0 > bound, bound / jnp.where(norm0 > 0, norm0, 1.0), 1.0)[:, None]
+    scale = jnp.maximum(jnp.max(bound), jnp.finfo(dtype).tiny)
+
+    def body(carry):
+        y, z, lam, k, _ = carry
+        g = rho[:, None] * (z - u0) - lam
+        y = block_tridiagonal_factor_solve(factor, A_U, rhs + _apply_rows_t(ga, gb, g))
+        slip = _apply_rows(ga, gb, y) + u0
+        z_new = jnp.where(active[:, None], _shrink(slip + lam / safe_rho[:, None], bound / safe_rho), 0.0)
+        primal = rho[:, None] * (slip - z_new)
+        lam = jnp.where(active[:, None], lam + primal, 0.0)
+        dual = rho[:, None] * (z_new - z)
+        change = jnp.maximum(jnp.max(jnp.sqrt(jnp.sum(primal**2, -1))), jnp.max(jnp.sqrt(jnp.sum(dual**2, -1))))
+        return y, z_new, lam, k + 1, change / scale
+
+    def more(carry):
+        return (carry[3] == 0) | ((carry[3] < max_iter) & (carry[4] > tol))
+
+    y0 = jnp.zeros_like(rhs)
+    z0 = jnp.zeros_like(u0)
+    y, z, lam, k, res = jax.lax.while_loop(more, body, (y0, z0, lam0, jnp.array(0), jnp.asarray(jnp.inf, dtype)))
+    step = s * y
+    moved = hk > 0
+    vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
+    stuck = active & (jnp.sum(z * z, -1) == 0)
+    force = -lam / jnp.where(moved, hk, 1.0)
+    out = Rod3DVelocity(vn, w, jnp.where(moved, stuck, v.stuck), jnp.where(moved, force, v.force),
+                        jnp.where(moved, jnp.where(jnp.any(active), res, 0.0), v.residual),
+                        jnp.where(moved, k.astype(dtype), v.sweeps))
+    # M⁻¹Gᵀλ = S (G̃ᵀλ): the trial velocity the friction impulse p = −λ took to v_new
+    back = s * _apply_rows_t(ga, gb, lam)
+    trial = Rod3DVelocity(out.v + back[:, :3], out.w + back[:-1, 3:], out.stuck, out.force, out.residual, out.sweeps)
+    impulse = jnp.where(s > 0, -gamma * h * _component_matvec(*Hd, hk * vel + h * step), 0.0) if gamma else jnp.zeros_like(vel)
+    return out, trial, impulse
