@@ -78,13 +78,14 @@ def _shrink(w, radius):
     return w * k[:, None]
 
 
-def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter: int = 200, tol: float = 1e-6):
+def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter: int = 200, tol=None, relax: float = 1.6):
     """The implicit kick of `hk` [s] in a step of `h` [s] with the wall friction solved on the
     coupled operator (module docstring). **Returns:** `(v_new, v_trial, impulse)`: the velocity
     after kick and friction (its `stuck`, `force` [N], `residual` and `sweeps`: the ADMM's last
     relative change and iterations), `v_trial` = v_new − M⁻¹Gᵀp (what `impulse_work` reads the
     friction impulse from) and the damping's impulse by blocks (as `implicit_kick`'s)."""
     dtype = v.v.dtype
+    tol = model.friction_tol.astype(dtype) if tol is None else tol
     D, U = _stacked(*_assembled(model, q.x, q.Q, tuple(beta + gamma * d for d in DAMPED), beta))
     free = _free(model, dtype)
     s = free / jnp.sqrt(_block_masses(model, dtype))
@@ -132,9 +133,10 @@ def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter
         g = rho[:, None] * (z - u0) - lam
         y = block_tridiagonal_factor_solve(factor, A_U, rhs + _apply_rows_t(ga, gb, g))
         slip = _apply_rows(ga, gb, y) + u0
-        z_new = jnp.where(active[:, None], _shrink(slip + lam / safe_rho[:, None], bound / safe_rho), 0.0)
+        relaxed = relax * slip + (1.0 - relax) * z  # over-relaxation (Boyd et al. §3.4.3)
+        z_new = jnp.where(active[:, None], _shrink(relaxed + lam / safe_rho[:, None], bound / safe_rho), 0.0)
+        lam = jnp.where(active[:, None], lam + rho[:, None] * (relaxed - z_new), 0.0)
         primal = rho[:, None] * (slip - z_new)
-        lam = jnp.where(active[:, None], lam + primal, 0.0)
         dual = rho[:, None] * (z_new - z)
         change = jnp.maximum(jnp.max(jnp.sqrt(jnp.sum(primal**2, -1))), jnp.max(jnp.sqrt(jnp.sum(dual**2, -1))))
         return y, z_new, lam, k + 1, change / scale
