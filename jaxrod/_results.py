@@ -19,6 +19,7 @@ class RESULTS:
     step_limit = 2
     max_steps = 3
     invalid_input = 4
+    inadequate = 5
 
     messages = {
         0: "successful",
@@ -26,6 +27,8 @@ class RESULTS:
         2: "the time step is above the integrator's stability limit",
         3: "the maximum number of steps (or phases) was reached before t1",
         4: "an input value is outside its valid range",
+        5: "the scheme is not adequate for this run (the 3D rod past the wall's wrinkling load with the implicit "
+           "scheme's local friction pass: use ImplicitLeapfrog(coupled=True) or the explicit leapfrog)",
     }
 
     @classmethod

@@ -55,6 +55,8 @@ class Scene(eqx.Module):
       Galerkin, 1e-4 s for one mode, 0.5 of the explicit limit for the 3D rod).
     - `threshold`: buckling amplitude max|θ| [rad] (static, default 0.5).
     - `grid_dt`: step of that grid's forcing phase (static; default 0.4 of its limit).
+    - `scheme_key`: the runs' scheme, a key of `jaxrod.integrators.SCHEMES` (static; default
+      `None`: the model's choice under the perturbation and the load, `scheme`).
     - `n_grid`: nodes of the field grid on which random perturbations are drawn before being
       projected onto the single mode (static).
     """
@@ -69,6 +71,7 @@ class Scene(eqx.Module):
     n_grid: int = eqx.field(static=True, default=128)
     threshold: float = eqx.field(static=True, default=0.5)
     grid_dt: float | None = eqx.field(static=True, default=None)
+    scheme_key: str | None = eqx.field(static=True, default=None)
 
     def __check_init__(self):
         cls = model_class(self.kind)
@@ -142,9 +145,12 @@ class Scene(eqx.Module):
 
     def scheme(self) -> str | None:
         """The scheme of the scene's runs (a key of `jaxrod.integrators.SCHEMES`; `None`: the
-        model's own): the model's `scheme_under` the perturbation (the 3D rod runs its implicit
-        default only under a perturbation measured adequate for it, `implicit_3d`)."""
-        return self.model_class.scheme_under(self.perturbation)
+        model's own): the model's `scheme_under` the perturbation and the load (the 3D rod runs its
+        implicit default only under a perturbation measured adequate for it, `implicit_3d`, and
+        below the wall's wrinkling load)."""
+        if self.scheme_key is not None:
+            return self.scheme_key
+        return self.model_class.scheme_under(self.perturbation, self.rod, self.F)
 
     def integrator(self) -> AbstractFixedStep:
         """The run's integrator: the scene's scheme (`scheme`; `jaxrod.integrators.default_for`)

@@ -140,3 +140,36 @@ def test_a_kick_of_zero_length_changes_nothing():
     np.testing.assert_array_equal(np.asarray(out.v), np.asarray(v.v))
     np.testing.assert_array_equal(np.asarray(out.stuck), np.asarray(v.stuck))
     np.testing.assert_array_equal(np.asarray(out.force), np.asarray(v.force))
+
+
+def test_the_wrinkling_load_and_where_each_scheme_runs():
+    """F_w = 2√(EI k_w), k_w = 1.5 w/δ₀ at the default wall (δ₀ = 1e-3 R): 50.05 N for the reference
+    rod, from its own numbers; none without a channel. A sine scene runs the implicit default below
+    it and the explicit leapfrog past it (a given `scheme_key` wins); the implicit scheme's local
+    pass ends a run past it with the result code `inadequate`, the coupled solve does not."""
+    from jaxrod import RESULTS, theory
+    from jaxrod.perturbations import SineVelocity
+    from jaxrod.scene import Scene
+
+    rod = jr.RodChannel.reference(0.3)
+    EI = float(rod.E) * np.pi * float(rod.d) ** 4 / 64
+    w = float(rod.rho_v) * np.pi * float(rod.d) ** 2 / 4 * float(rod.g)
+    F_w = 2 * np.sqrt(EI * 1.5 * w / (1e-3 * float(rod.R)))
+    assert float(Rod3D(rod, 6).wrinkling_load()) == pytest.approx(F_w, rel=1e-9)
+    assert F_w == pytest.approx(50.05, abs=0.01)
+    assert np.isinf(float(Rod3D(rod, 6, channel=False).wrinkling_load()))
+
+    F0 = float(theory.reference_load(rod))
+    below, past = F_w - F0 - 1.0, F_w - F0 + 1.0
+    sine = SineVelocity(1e-3)
+    assert Scene(rod, below, sine, kind="rod3d", n=12).scheme() is None
+    assert Scene(rod, past, sine, kind="rod3d", n=12).scheme() == "leapfrog"
+    assert Scene(rod, past, sine, kind="rod3d", n=12, scheme_key="implicit").scheme() == "implicit"
+
+    for dF, coupled, code in ((below, False, RESULTS.successful), (past, False, RESULTS.inadequate),
+                              (past, True, RESULTS.successful)):
+        model = Rod3D(rod, 6, control="load", end_load=F0 + dF)
+        scheme = jr.ImplicitLeapfrog(5e-5, coupled=coupled)
+        q0, v0 = model.initial_state()
+        s = scheme.start(model, q0, v0, jr.RunOptions())
+        assert int(scheme.result(model, s, jnp.asarray(5e-5))) == code

@@ -54,9 +54,9 @@ def _resolution(rod, dF, model, n, mode, dt, perturbation="sine"):
     return probe.size(), probe.step()
 
 
-def _scene(rod, dF, v0, kind, n, mode, dt, perturbation, key):
+def _scene(rod, dF, v0, kind, n, mode, dt, perturbation, key, scheme=None):
     pert = make_perturbation(perturbation, v0, mode, key)
-    return Scene(rod, dF, pert, kind, n, mode, dt)
+    return Scene(rod, dF, pert, kind, n, mode, dt, scheme_key=scheme)
 
 
 METHODS = ("departure", "bisection")
@@ -347,12 +347,12 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
     return _along_curve(search, dFs, p6, bracket, margin, progress)
 
 
-def _bisect_near(rod, dF, guess, lo, hi, *, model, mode, n, dt, rtol, max_iter, t1, width, sensitivities):
+def _bisect_near(rod, dF, guess, lo, hi, *, model, mode, n, dt, rtol, max_iter, t1, width, sensitivities, scheme):
     """Label bisection from `guess`·(1 ∓ `width`) inside [`lo`, `hi`] and the sensitivities at its
-    lowest buckled run (`boundary_curve`'s seeded path)."""
+    lowest buckled run (`boundary_curve`'s seeded path), runs of the scheme `scheme`."""
     params = _params_of(rod, dF=dF)
     scene_of2 = lambda v0, p: _scene(_rod_of(type(rod), p), p["dF"], v0, model, n, mode, dt, "sine",
-                                     jax.random.key(0))
+                                     jax.random.key(0), scheme)
     res = expanding_bisection(_label(lambda v0: scene_of2(v0, params), t1), guess, width, rtol, max_iter,
                               floor=lo, ceiling=hi)
     sub = {k: params[k] for k in sensitivities}
@@ -380,23 +380,33 @@ def _seeded_bisection(rod, dFs, bracket, width, n, dt, progress, *, model, mode,
     guess = np.asarray(guess.root)
     # a field search that failed leaves no prediction: the middle of the bracket (geometric)
     guess = np.where(np.isfinite(guess), guess, math.sqrt(bracket[0] * bracket[1]))
-    n, dt = _resolution(rod, float(np.max(dFs)), model, n, mode, dt)
     dtype = jnp.result_type(float)
     lo, hi = (jnp.asarray(b, dtype) for b in bracket)
-    one = lambda r, dF, g: _bisect_near(r, dF, g, lo, hi, model=model, mode=mode, n=n, dt=dt, rtol=rtol,
-                                        max_iter=max_iter, t1=t1, width=width, sensitivities=tuple(sensitivities))
-    devices = jax.local_devices()[:len(dFs)]
-    run = _on_devices(one, devices)
+    # the scheme of each load (the 3D rod's implicit default below the wall's wrinkling load, the
+    # explicit leapfrog past it): one compiled search per scheme, at its largest load's resolution
+    schemes = [Scene(rod, float(dF), make_perturbation("sine", 1.0, mode), kind=model, n=n, mode=mode).scheme()
+               for dF in dFs]
     bar = _progress(len(dFs), progress)
-    out = []
-    for start in range(0, len(dFs), len(devices)):
-        chunk = np.arange(start, start + len(devices)).clip(max=len(dFs) - 1)  # the last chunk padded
-        res = run(rod, jnp.asarray(dFs[chunk], dtype), jnp.asarray(guess[chunk], dtype))
-        k = min(len(devices), len(dFs) - start)
-        out.append(jax.tree_util.tree_map(lambda a: np.asarray(a)[:k], res))
-        bar.update(k)
+    out = [None] * len(dFs)
+    for scheme in dict.fromkeys(schemes):
+        idx = np.flatnonzero([s_ == scheme for s_ in schemes])
+        probe = Scene(rod, float(np.max(dFs[idx])), make_perturbation("sine", 1.0, mode), kind=model, n=n, mode=mode,
+                      dt=dt, scheme_key=scheme)
+        n_, dt_ = probe.size(), probe.step()
+        one = lambda r, dF, g, n_=n_, dt_=dt_, scheme=scheme: _bisect_near(
+            r, dF, g, lo, hi, model=model, mode=mode, n=n_, dt=dt_, rtol=rtol, max_iter=max_iter, t1=t1, width=width,
+            sensitivities=tuple(sensitivities), scheme=scheme)
+        devices = jax.local_devices()[:len(idx)]
+        run = _on_devices(one, devices)
+        for start in range(0, len(idx), len(devices)):
+            chunk = idx[np.arange(start, start + len(devices)).clip(max=len(idx) - 1)]  # the last chunk padded
+            res = run(rod, jnp.asarray(dFs[chunk], dtype), jnp.asarray(guess[chunk], dtype))
+            k = min(len(devices), len(idx) - start)
+            for j in range(k):
+                out[chunk[j]] = jax.tree_util.tree_map(lambda a: np.asarray(a)[j], res)
+            bar.update(k)
     bar.close()
-    return jax.tree_util.tree_map(lambda *a: jnp.asarray(np.concatenate(a)), *out)
+    return jax.tree_util.tree_map(lambda *a: jnp.asarray(np.stack(a)), *out)
 
 
 def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, seed=0, model="field",

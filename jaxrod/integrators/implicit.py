@@ -6,6 +6,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from .._results import RESULTS
 from .leapfrog import ProjectedLeapfrog
 
 __all__ = ["ImplicitLeapfrog"]
@@ -79,6 +80,16 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
         if aux is None:
             return lost
         return tuple(a + b for a, b in zip(lost, model.damping_loss(v_prev, v_after, aux)))
+
+    def result(self, model, s, h, check_step_limit: bool = True):
+        """The base code, or `RESULTS.inadequate` where the model says this scheme is outside
+        its measured range (`model.implicit_inadequate(coupled)`, the 3D rod past the wall's
+        wrinkling load with the local friction pass): a run that says so, not a wrong label."""
+        code = super().result(model, s, h, check_step_limit)
+        check = getattr(model, "implicit_inadequate", None)
+        if check is None:
+            return code
+        return jnp.where((code == RESULTS.successful) & check(self.coupled), RESULTS.inadequate, code).astype(code.dtype)
 
     @classmethod
     def default_step(cls, model, q=None) -> float:

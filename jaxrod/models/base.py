@@ -185,9 +185,9 @@ class AbstractModel(eqx.Module):
 
     @classmethod
     @abc.abstractmethod
-    def scheme_under(cls, perturbation) -> str | None:
-        """The scheme (a key of `jaxrod.integrators.SCHEMES`) of a run under `perturbation`;
-        `None`: the model's own."""
+    def scheme_under(cls, perturbation, rod=None, F=None) -> str | None:
+        """The scheme (a key of `jaxrod.integrators.SCHEMES`) of a run under `perturbation`, of
+        `rod` under the axial load `F` [N] where they are given; `None`: the model's own."""
 
     @classmethod
     @abc.abstractmethod

@@ -136,7 +136,7 @@ class AbstractDOFModel(AbstractModel):
     # -- the scene ---------------------------------------------------------------------------------
 
     @classmethod
-    def scheme_under(cls, perturbation) -> str | None:
+    def scheme_under(cls, perturbation, rod=None, F=None) -> str | None:
         return None
 
     @classmethod
@@ -268,7 +268,7 @@ class _Forced(AbstractModel):
     default_size = for_scene
 
     @classmethod
-    def scheme_under(cls, perturbation):
+    def scheme_under(cls, perturbation, rod=None, F=None):
         return None
 
     @classmethod

@@ -145,7 +145,7 @@ def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter
         return (carry[3] == 0) | ((carry[3] < max_iter) & (carry[4] > tol))
 
     y0 = jnp.zeros_like(rhs)
-    z0 = jnp.zeros_like(u0)
+    z0 = jnp.where((active & ~v.stuck)[:, None], u0, 0.0)  # a sliding contact starts at its slip
     y, z, lam, k, res = jax.lax.while_loop(more, body, (y0, z0, lam0, jnp.array(0), jnp.asarray(jnp.inf, dtype)))
     step = s * y
     moved = hk > 0

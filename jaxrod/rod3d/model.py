@@ -16,6 +16,7 @@ import copy
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
@@ -319,6 +320,16 @@ class Rod3D(AbstractModel):
         return frequency_bound(self, q)
 
     static_sag = state.static_sag  # the rod's sink into the wall under its weight [m] (`state.static_sag`)
+    wrinkling_load = state.wrinkling_load  # the axial force [N] past which the straight rod wrinkles into the wall
+
+    def implicit_inadequate(self, coupled: bool):
+        """Whether [`jaxrod.ImplicitLeapfrog`][] is outside its measured range on this rod: with
+        the local friction pass (`coupled=False`), friction at the contact point and the straight
+        rod's axial force past `wrinkling_load`, where at the default step every amplitude
+        buckles (docs/rod3d.md); its runs end with the result code `inadequate`."""
+        if coupled or self.friction_at != "surface":
+            return jnp.array(False)
+        return self.axial_preload() > self.wrinkling_load()
     initial_state = straight_state  # (F=None, lateral_velocity=None, lateral_offset=None) -> (q0, v0)
 
     # -- where a perturbation field is given (the AbstractModel interface) -------------------
@@ -382,9 +393,21 @@ class Rod3D(AbstractModel):
         return 60  # a scene's segments, as E1 and E6 (docs/rod3d.md)
 
     @classmethod
-    def scheme_under(cls, perturbation) -> str | None:
-        """Its implicit default only under a perturbation measured adequate for it (`implicit_3d`)."""
-        return None if type(perturbation).implicit_3d else "leapfrog"
+    def scheme_under(cls, perturbation, rod=None, F=None) -> str | None:
+        """Its implicit default only under a perturbation measured adequate for it (`implicit_3d`)
+        and, where the rod and a concrete load `F` [N] are given, below the scene's rod's
+        `wrinkling_load` (past it the implicit scheme's local friction pass lets the rod wrinkle:
+        the explicit scheme runs)."""
+        if not type(perturbation).implicit_3d:
+            return "leapfrog"
+        if rod is not None and F is not None:
+            try:
+                past = float(F) > float(cls.for_scene(rod, F, cls.min_size, 1).wrinkling_load())
+            except jax.errors.ConcretizationTypeError:  # a traced load: the run's result code says it
+                past = False
+            if past:
+                return "leapfrog"
+        return None
 
     @classmethod
     def bytes_per_member(cls, size: int | None) -> int:

@@ -95,6 +95,19 @@ def static_sag(model):
     return sag if model.channel and model.gravity else 0.0 * sag
 
 
+def wrinkling_load(model):
+    """The axial force [N] past which the straight rod resting on the wall is unstable to
+    wrinkling into it: F_w = 2√(EI k_w), the compressed beam on an elastic foundation, with k_w =
+    1.5 k √δ the Hertz wall's stiffness per length at the static sag δ (`static_sag`; 1.5 w/δ at
+    the default k, ≈ 50 N for the reference rod). The wrinkle (wavelength 2π√(2EI/F)) needs the
+    segments to turn about the lateral axis, which the friction at the contact point resists:
+    the explicit scheme holds it, the implicit scheme's local friction pass does not
+    (docs/rod3d.md). `inf` without a channel or gravity."""
+    k_w = 1.5 * model.contact_stiffness * jnp.sqrt(static_sag(model))
+    F_w = 2.0 * jnp.sqrt(model.rod.EI * k_w)
+    return F_w if model.channel and model.gravity else jnp.full_like(F_w, jnp.inf)
+
+
 def straight_state(model, F: ArrayLike | None = None, lateral_velocity=None, lateral_offset=None):
     """A straight rod along x on the channel bottom (or on the x axis without a channel),
     compressed to the uniform axial force `F` [N] (length L(1 − F/EA); default
