@@ -1,0 +1,151 @@
+"""Where the 3D rod's implicit step goes wrong, and what the coupled friction solve changes: the
+diagnostic runs behind docs/rod3d.md, "The implicit step" (issue [nonsmooth3d]). Each
+subcommand prints one JSON line per result; the committed lines are in
+`benchmarks/results/rod3d_nonsmooth_diag.jsonl` with the commit whose code ran them.
+
+    python benchmarks/rod3d_nonsmooth_diag.py e4 --scheme local --dt 2e-5 1e-5     # E4 C, mu 0.05 (~3-5 min a step)
+    python benchmarks/rod3d_nonsmooth_diag.py e4 --scheme coupled --dt 5e-5        # (~7 min)
+    python benchmarks/rod3d_nonsmooth_diag.py wrinkle                              # the 61 N rod, seeded (~2 min)
+    python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
+    python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
+
+- `e4`: E4 case C (random position ±2 N/m for 1 ms, realization 0) at μ = 0.05, 500 segments, the
+  implicit scheme forced on the random perturbation (`implicit_3d`), ΔF* by bisection to 1 %, at
+  each step (explicit reference: results/paper/e4/rod3d_n500.csv, 1.3956–1.4000 N);
+- `wrinkle`: the rod at F⁰₆ + 60 N, 500 segments, sine 1 µm/s plus node velocities 1e-9 m/s
+  (normal, seed 1) along z: the largest vertical displacement over 0.04 s, friction at the
+  contact point or at the axis, local pass at 2e-5 and 5e-5 s, coupled at 5e-5 s;
+- `vstar`: E3's v₀* at a sine mode-6 velocity (boundary_curve, rtol 3e-3, horizon 0.4 s);
+- `modes`: the lowest eigenvalues of M^{-1/2} H M^{-1/2} of the straight loaded rod on the wall,
+  and the lowest whose eigenvector moves mostly along z (the wrinkle into the wall).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+import equinox as eqx  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+
+import jaxrod as jr  # noqa: E402
+from jaxrod import theory  # noqa: E402
+from jaxrod.integrators import SCHEMES, ImplicitLeapfrog  # noqa: E402
+from jaxrod.rod3d import Rod3D, sine_velocity  # noqa: E402
+
+
+def _scheme(name, gamma=0.1):
+    class Chosen(ImplicitLeapfrog):
+        coupled: bool = eqx.field(static=True, default=name == "coupled")
+        gamma: float = eqx.field(static=True, default=gamma)  # noqa: F811
+
+    return Chosen
+
+
+def e4(args):
+    from jaxrod import perturbations
+    from jaxrod.experiments.e4.rod3d import e4_point
+
+    SCHEMES["implicit"] = _scheme(args.scheme)
+    for c in (perturbations.RandomForce, perturbations.RandomVelocity):
+        c.implicit_3d = True
+    for dt in args.dt:
+        Rod3D.implicit_step = dt
+        t = time.perf_counter()
+        row = e4_point("C", 0.05, 0, 500, t1=0.5, width=1.5)
+        print(json.dumps(dict(what="E4 C mu 0.05 dF* [N]", scheme=args.scheme, dt=dt, lo=row["lo"], hi=row["hi"],
+                              result=row["result"], runs=row["runs"], wall_s=round(time.perf_counter() - t, 1))), flush=True)
+
+
+def wrinkle(args):
+    rod = jr.RodChannel.reference(0.3)
+    F = float(theory.reference_load(rod)) + 60.0
+    for fa, dt, coupled in (("axis", 2e-5, False), ("surface", 2e-5, False), ("surface", 5e-5, False),
+                            ("surface", 5e-5, True)):
+        m = Rod3D(rod, 500, control="load", end_load=F, friction_at=fa)
+        q0, v0 = m.initial_state(None, lateral_velocity=sine_velocity(m, 1e-6))
+        vz = 1e-9 * np.random.default_rng(1).normal(size=501)
+        vz[0] = vz[-1] = 0
+        v0 = type(v0)(v0.v.at[:, 2].set(jnp.asarray(vz)), v0.w, v0.stuck, v0.force, v0.residual, v0.sweeps)
+        sol = jr.simulate(m, ImplicitLeapfrog(dt, coupled=coupled), q0, v0, 0.04, n_save=11,
+                          options=jr.RunOptions(buckle_threshold=10.0, stop_on_buckle=False), throw=False)
+        dz = np.abs(np.asarray(sol.q.x)[:, :, 2] - np.asarray(q0.x)[None, :, 2]).max(1)
+        print(json.dumps(dict(what="max |dz| [m] every 4 ms, F0_6 + 60 N, 500 segments", friction_at=fa, dt=dt,
+                              scheme="coupled" if coupled else "local", dz=[float(f"{d:.2e}") for d in dz])), flush=True)
+
+
+def vstar(args):
+    from jaxrod import boundary as bd
+
+    SCHEMES["implicit"] = _scheme(args.scheme, args.gamma)
+    rod = jr.RodChannel.reference(0.3)
+    for dF in args.dF:
+        t = time.perf_counter()
+        res, _ = bd.boundary_curve(rod, [dF], model="rod3d", n=args.n, bracket=(1e-5, 2.0), rtol=3e-3, sensitivities=())
+        print(json.dumps(dict(what="E3 v0* [mm/s]", scheme=args.scheme, gamma=args.gamma, n=args.n, dF=dF,
+                              lo=1e3 * float(res.lo[0]), hi=1e3 * float(res.hi[0]), runs=int(res.evaluations[0]),
+                              result=int(res.result[0]), wall_s=round(time.perf_counter() - t, 1))), flush=True)
+
+
+def modes(args):
+    from jaxrod.rod3d.hessian import hessian_blocks
+    from jaxrod.rod3d.state import held_pattern
+
+    rod = jr.RodChannel.reference(0.3)
+    n = args.n
+    for dF in args.dF:
+        m = Rod3D(rod, n, control="load", end_load=float(theory.reference_load(rod)) + dF)
+        q0, _ = m.initial_state()
+        D, U = (np.asarray(b) for b in hessian_blocks(m, q0.x, q0.Q))
+        H = np.zeros((6 * (n + 1),) * 2)
+        for k in range(n + 1):
+            H[6 * k:6 * k + 6, 6 * k:6 * k + 6] = D[k]
+            if k < n:
+                H[6 * k:6 * k + 6, 6 * k + 6:6 * k + 12] = U[k]
+                H[6 * k + 6:6 * k + 12, 6 * k:6 * k + 6] = U[k].T
+        held_n, held_s = held_pattern(m)
+        free = np.concatenate([~held_n, np.concatenate([~held_s, np.zeros((1, 3), bool)])], -1).reshape(-1)
+        mass = np.concatenate([np.repeat(np.asarray(m.mass)[:, None], 3, 1),
+                               np.concatenate([np.repeat(np.asarray(m.inertia)[None], n, 0), np.ones((1, 3))])], -1)
+        s = 1 / np.sqrt(mass.reshape(-1)[free])
+        w, V = np.linalg.eigh(s[:, None] * H[np.ix_(free, free)] * s[None, :])
+        idx = np.flatnonzero(free)
+        z_first = None
+        for j in range(len(w)):
+            vec = np.zeros(6 * (n + 1))
+            vec[idx] = s * V[:, j]
+            comp = np.abs(vec.reshape(n + 1, 6)[:, :3]).sum(0)
+            if comp[2] > 0.5 * comp.sum():
+                z_first = float(w[j])
+                break
+        print(json.dumps(dict(what="omega^2 [1/s^2] of the straight rod on the wall", n=n, dF=dF, F=float(m.end_load),
+                              lowest=float(w[0]), lowest_vertical=z_first,
+                              wrinkling_load=float(m.wrinkling_load()))), flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    p = sub.add_parser("e4")
+    p.add_argument("--scheme", choices=["local", "coupled"], default="local")
+    p.add_argument("--dt", type=float, nargs="+", default=[5e-5])
+    sub.add_parser("wrinkle")
+    p = sub.add_parser("vstar")
+    p.add_argument("--scheme", choices=["local", "coupled"], default="coupled")
+    p.add_argument("--gamma", type=float, default=0.1)
+    p.add_argument("--n", type=int, default=60)
+    p.add_argument("--dF", type=float, nargs="+", default=[5.0, 20.0])
+    p = sub.add_parser("modes")
+    p.add_argument("--n", type=int, default=500)
+    p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
+    args = ap.parse_args()
+    {"e4": e4, "wrinkle": wrinkle, "vstar": vstar, "modes": modes}[args.cmd](args)
+
+
+if __name__ == "__main__":
+    main()
