@@ -78,7 +78,8 @@ def _shrink(w, radius):
     return w * k[:, None]
 
 
-def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter: int = 200, tol=None, relax: float = 1.6):
+def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter: int = 200, tol=None, relax: float = 1.6,
+                 method: str = "newton"):
     """The implicit kick of `hk` [s] in a step of `h` [s] with the wall friction solved on the
     coupled operator (module docstring). **Returns:** `(v_new, v_trial, impulse)`: the velocity
     after kick and friction (its `stuck`, `force` [N], `residual` and `sweeps`: the ADMM's last
@@ -115,18 +116,42 @@ def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter
     bound = hk * jnp.where(v.stuck, model.rod.mu_s, model.rod.mu_d) * N
     bound = jnp.where(active, bound, 0.0)
 
-    K_own = rho[:, None, None] * jnp.einsum("kai,kaj->kij", ga, ga)
-    K_left = rho[:, None, None] * jnp.einsum("kai,kaj->kij", gb, gb)
-    K_cross = rho[:, None, None] * jnp.einsum("kai,kaj->kij", gb, ga)  # (left spin of block i − 1) × block i
-    A_D = (A_D + K_own).at[:-1, 3:, 3:].add(K_left[1:])
-    A_U = A_U.at[:, 3:, :].add(K_cross[1:])
-    factor = block_tridiagonal_factor(A_D, A_U)
-
     safe_rho = jnp.where(active, rho, 1.0)
     lam0 = jnp.where(active[:, None], -v.force * hk, 0.0)
     norm0 = jnp.sqrt(jnp.sum(lam0 * lam0, -1))
     lam0 = lam0 * jnp.where(norm0 > bound, bound / jnp.where(norm0 > 0, norm0, 1.0), 1.0)[:, None]
     scale = jnp.maximum(jnp.max(bound), jnp.finfo(dtype).tiny)
+    solve = _newton if method == "newton" else _admm
+    y, lam, stuck, k, res = solve(A_D, A_U, rhs, ga, gb, u0, rho, safe_rho, bound, active, lam0, v.stuck, scale,
+                                  max_iter, tol, relax)
+    step = s * y
+    moved = hk > 0
+    vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
+    force = -lam / jnp.where(moved, hk, 1.0)
+    out = Rod3DVelocity(vn, w, jnp.where(moved, stuck, v.stuck), jnp.where(moved, force, v.force),
+                        jnp.where(moved, jnp.where(jnp.any(active), res, 0.0), v.residual),
+                        jnp.where(moved, k.astype(dtype), v.sweeps))
+    # M⁻¹Gᵀλ = S (G̃ᵀλ): the trial velocity the friction impulse p = −λ took to v_new
+    back = s * _apply_rows_t(ga, gb, lam)
+    trial = Rod3DVelocity(out.v + back[:, :3], out.w + back[:-1, 3:], out.stuck, out.force, out.residual, out.sweeps)
+    impulse = jnp.where(s > 0, -gamma * h * _component_matvec(*Hd, hk * vel + h * step), 0.0) if gamma else jnp.zeros_like(vel)
+    return out, trial, impulse
+
+
+def _with_contacts(A_D, A_U, ga, gb, K):
+    """The blocks of A + Σ G̃ᵢᵀ Kᵢ G̃ᵢ for per-contact 2×2 matrices K (n + 1, 2, 2)."""
+    own = jnp.einsum("kai,kab,kbj->kij", ga, K, ga)
+    left = jnp.einsum("kai,kab,kbj->kij", gb, K, gb)
+    cross = jnp.einsum("kai,kab,kbj->kij", gb, K, ga)  # (left spin of block i − 1) × block i
+    return (A_D + own).at[:-1, 3:, 3:].add(left[1:]), A_U.at[:, 3:, :].add(cross[1:])
+
+
+def _admm(A_D, A_U, rhs, ga, gb, u0, rho, safe_rho, bound, active, lam0, was_stuck, scale, max_iter, tol, relax):
+    """ADMM on zᵢ = G̃ᵢ y + u0ᵢ: one factorisation of A + Σρᵢ G̃ᵢᵀG̃ᵢ, a solve an iteration.
+    **Returns:** `(y, λ, stuck, iterations, residual)`."""
+    eye = jnp.eye(2, dtype=rhs.dtype)[None]
+    A_D, A_U = _with_contacts(A_D, A_U, ga, gb, rho[:, None, None] * eye)
+    factor = block_tridiagonal_factor(A_D, A_U)
 
     def body(carry):
         y, z, lam, k, _ = carry
@@ -145,18 +170,72 @@ def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter
         return (carry[3] == 0) | ((carry[3] < max_iter) & (carry[4] > tol))
 
     y0 = jnp.zeros_like(rhs)
-    z0 = jnp.where((active & ~v.stuck)[:, None], u0, 0.0)  # a sliding contact starts at its slip
-    y, z, lam, k, res = jax.lax.while_loop(more, body, (y0, z0, lam0, jnp.array(0), jnp.asarray(jnp.inf, dtype)))
-    step = s * y
-    moved = hk > 0
-    vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
-    stuck = active & (jnp.sum(z * z, -1) == 0)
-    force = -lam / jnp.where(moved, hk, 1.0)
-    out = Rod3DVelocity(vn, w, jnp.where(moved, stuck, v.stuck), jnp.where(moved, force, v.force),
-                        jnp.where(moved, jnp.where(jnp.any(active), res, 0.0), v.residual),
-                        jnp.where(moved, k.astype(dtype), v.sweeps))
-    # M⁻¹Gᵀλ = S (G̃ᵀλ): the trial velocity the friction impulse p = −λ took to v_new
-    back = s * _apply_rows_t(ga, gb, lam)
-    trial = Rod3DVelocity(out.v + back[:, :3], out.w + back[:-1, 3:], out.stuck, out.force, out.residual, out.sweeps)
-    impulse = jnp.where(s > 0, -gamma * h * _component_matvec(*Hd, hk * vel + h * step), 0.0) if gamma else jnp.zeros_like(vel)
-    return out, trial, impulse
+    z0 = jnp.where((active & ~was_stuck)[:, None], u0, 0.0)  # a sliding contact starts at its slip
+    y, z, lam, k, res = jax.lax.while_loop(more, body, (y0, z0, lam0, jnp.array(0), jnp.asarray(jnp.inf, rhs.dtype)))
+    return y, lam, active & (jnp.sum(z * z, -1) == 0), k, res
+
+
+NEWTON_RHO = 0.03
+"""`_newton`'s ρ as a fraction of the ADMM's (the geometric mean of a contact's own-mass and
+stiffness-diagonal effective masses): at 0.3 and above the stick–slip classification of a kick
+at 100× the explicit limit cycles between two active sets; at 0.01–0.1 it converges in 3–5
+iterations (tests/test_rod3d_coupled.py's first case)."""
+
+STICK_EPS = 1e-4
+"""The stick rows' regularisation in `_newton`: stick is P = (1 − ε) I, so a Newton step takes a
+stuck contact's slip down by about a factor ε (the next steps take it to the tolerance)."""
+
+
+def _newton(A_D, A_U, rhs, ga, gb, u0, rho, safe_rho, bound, active, lam0, was_stuck, scale, max_iter, tol, relax):
+    """Semismooth Newton on Alart–Curnier's equations  Ã y + G̃ᵀλ = b̃,  λᵢ = proj_{bᵢ}(λᵢ + ρᵢ uᵢ)
+    (uᵢ = G̃ᵢ y + u0ᵢ): at each iterate a contact sticks where ‖σᵢ‖ ≤ bᵢ (σ = λ + ρu, proj' = I,
+    regularised to (1 − ε) I) and slips elsewhere (proj' = (bᵢ/‖σᵢ‖)(I − ŝŝᵀ)); eliminating dλ
+    leaves (Ã + Σ G̃ᵢᵀ ρᵢ(I − Pᵢ)⁻¹Pᵢ G̃ᵢ) dy = −F_y + Σ G̃ᵢᵀ (I − Pᵢ)⁻¹ F_λ,ᵢ, block tridiagonal: one
+    factorisation and solve an iteration. The y equation holds after every step; the iteration
+    stops when max ‖λ − proj(σ)‖ ≤ `tol` × the largest bound. **Returns:** as `_admm`."""
+    dtype = rhs.dtype
+    eye = jnp.eye(2, dtype=dtype)[None]
+    r = NEWTON_RHO * rho[:, None]
+
+    def linearised(y, lam):
+        u = _apply_rows(ga, gb, y) + u0
+        sigma = lam + r * u
+        norm = jnp.sqrt(jnp.sum(sigma * sigma, -1))
+        stick = active & (norm <= bound)
+        shat = sigma / jnp.where(norm > 0, norm, 1.0)[:, None]
+        proj = jnp.where(stick[:, None], sigma, bound[:, None] * shat)
+        F_lam = jnp.where(active[:, None], lam - proj, lam)
+        beta_ = jnp.where(stick, 1.0 - STICK_EPS, bound / jnp.where(norm > 0, norm, 1.0))
+        perp = jnp.stack([-shat[:, 1], shat[:, 0]], -1)
+        Pm = jnp.where(stick[:, None, None], (1.0 - STICK_EPS) * eye,
+                       beta_[:, None, None] * perp[:, :, None] * perp[:, None, :])
+        # (I − P)⁻¹: on the stick rows 1/ε; on the slip rows 1 along ŝ, 1/(1 − β) across it
+        inv = jnp.where(stick[:, None, None], eye / STICK_EPS,
+                        eye + (beta_ / (1.0 - beta_))[:, None, None] * perp[:, :, None] * perp[:, None, :])
+        inv = jnp.where(active[:, None, None], inv, eye)
+        Pm = jnp.where(active[:, None, None], Pm, 0.0)
+        return u, stick, F_lam, Pm, inv
+
+    def body(carry):
+        y, lam, k, _, _ = carry
+        u, stick, F_lam, Pm, inv = linearised(y, lam)
+        K = r[:, :, None] * jnp.einsum("kab,kbc->kac", inv, Pm)
+        F_y = jnp.zeros_like(y)  # the y equation holds at every iterate (each step keeps it)
+        AD, AU = _with_contacts(A_D, A_U, ga, gb, K)
+        g = jnp.einsum("kab,kb->ka", inv, F_lam)
+        dy = block_tridiagonal_factor_solve(block_tridiagonal_factor(AD, AU), AU, -F_y + _apply_rows_t(ga, gb, g))
+        dlam = jnp.einsum("kab,kb->ka", inv, r * jnp.einsum("kab,kb->ka", Pm, _apply_rows(ga, gb, dy)) - F_lam)
+        y, lam = y + dy, jnp.where(active[:, None], lam + dlam, 0.0)
+        _, stick, F_lam, _, _ = linearised(y, lam)
+        res = jnp.max(jnp.sqrt(jnp.sum(F_lam * F_lam, -1))) / scale
+        return y, lam, k + 1, res, stick
+
+    def more(carry):
+        return (carry[2] == 0) | ((carry[2] < max_iter) & (carry[3] > tol))
+
+    # the start: λ from the last step, y solving its y equation
+    AD0, AU0 = _with_contacts(A_D, A_U, ga, gb, jnp.zeros((rhs.shape[0], 2, 2), dtype))
+    y0 = block_tridiagonal_factor_solve(block_tridiagonal_factor(AD0, AU0), AU0, rhs - _apply_rows_t(ga, gb, lam0))
+    y, lam, k, res, stick = jax.lax.while_loop(more, body, (y0, lam0, jnp.array(0), jnp.asarray(jnp.inf, dtype),
+                                                           was_stuck & active))
+    return y, lam, stick, k, res
