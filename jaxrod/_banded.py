@@ -64,13 +64,18 @@ def block_tridiagonal_solve(D: Float[Array, "nb m m"], U: Float[Array, "nb1 m m"
         return (C, y), (C, y)
 
     _, (C, y) = jax.lax.scan(forward, (jnp.zeros((m, m), D.dtype), jnp.zeros(m, D.dtype)), (D, Lk, Uk, b))
+    return _back_substitute(C, y)
+
+
+def _back_substitute(C, y):
+    """xₖ = yₖ − Cₖ xₖ₊₁ from the last block up: the block Thomas algorithm's backward scan."""
 
     def backward(x_next, inp):
         Ck, yk = inp
         x = yk - Ck @ x_next
         return x, x
 
-    _, x = jax.lax.scan(backward, jnp.zeros(m, D.dtype), (C, y), reverse=True)
+    _, x = jax.lax.scan(backward, jnp.zeros(y.shape[-1], y.dtype), (C, y), reverse=True)
     return x
 
 
@@ -118,11 +123,4 @@ def block_tridiagonal_factor_solve(factor, U: Float[Array, "nb1 m m"], b: Float[
         return y, y
 
     _, y = jax.lax.scan(forward, jnp.zeros(m, b.dtype), (Sinv, Lk, b))
-
-    def backward(x_next, inp):
-        Ck, yk = inp
-        x = yk - Ck @ x_next
-        return x, x
-
-    _, x = jax.lax.scan(backward, jnp.zeros(m, b.dtype), (C, y), reverse=True)
-    return x
+    return _back_substitute(C, y)

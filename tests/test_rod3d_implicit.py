@@ -17,16 +17,9 @@ from jaxrod.rod3d import Rod3D, sine_velocity, step_limit
 from jaxrod.rod3d.hessian import _turned, hessian_blocks, hessian_blocks_ad
 from jaxrod.rod3d.so3 import skew
 
+from test_rod3d_stiffness import _dense  # the dense matrix of blocks
 
-def _dense(D, U):
-    nb, m = D.shape[0], D.shape[-1]
-    A = np.zeros((nb * m, nb * m))
-    for k in range(nb):
-        A[m * k:m * k + m, m * k:m * k + m] = D[k]
-        if k < nb - 1:
-            A[m * k:m * k + m, m * k + m:m * k + 2 * m] = U[k]
-            A[m * k + m:m * k + 2 * m, m * k:m * k + m] = np.asarray(U[k]).T
-    return A
+
 
 
 def test_block_tridiagonal_solve_matches_a_dense_solve_and_flags_an_indefinite_matrix():
