@@ -130,7 +130,8 @@ def critical_velocity(
 
     `model="mode"` uses the exact single-mode solution (sine perturbation of `mode`, whose
     amplitude is the lateral speed v₀ = R·Ȧ₀) and Newton's method; `"field"`/`"galerkin"` run a
-    [`jaxrod.scene.Scene`][] until it sticks or buckles (at most `t1` [s]) and search by `method`
+    [`jaxrod.scene.Scene`][] until it sticks or buckles (at most `t1` [s]; default the model's
+    `search_horizon`: 2 s, the 3D rod 0.4 s) and search by `method`
     (`"departure"`, the default for field and Galerkin: [`jaxrod.boundary.departure_secant`][],
     first run at `start` if given, e.g. a prediction; `"bisection"` on the label, the default
     for `"rod3d"`). `n`, `dt` are static: pass them when vmapping over
@@ -162,7 +163,7 @@ def critical_load(
     method: str | None = None,
     rtol: float = 1e-6,
     max_iter: int = 60,
-    t1: float | None = None,
+    t1: float = 2.0,
     horizon: float = 10.0,
     sensitivities: tuple[str, ...] = ("mu", "amplitude", "R"),
 ):
@@ -410,7 +411,7 @@ def _seeded_bisection(rod, dFs, bracket, width, n, dt, progress, *, model, mode,
 
 
 def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, seed=0, model="field",
-                        n=None, dt=None, mode=6, bracket=(1e-2, 100.0), rtol=1e-6, max_iter=60, t1=None,
+                        n=None, dt=None, mode=6, bracket=(1e-2, 100.0), rtol=1e-6, max_iter=60, t1=2.0,
                         method=None, rod_overrides=None, sensitivities=("mu", "amplitude")):
     """ΔF*(μ) for an array of friction coefficients and `realizations` random perturbations
     each (keys `fold_in(key(seed), i·realizations + r)`), vmapped.

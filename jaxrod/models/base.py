@@ -165,8 +165,9 @@ class AbstractModel(eqx.Module):
     # how a boundary search finds its root: `"exact"` (the closed form, sine perturbations),
     # `"departure"` (the departure rate) or `"bisection"` (on the label)
     search_method: eqx.AbstractClassVar[str]
-    # the horizon of a search's runs [s]: a run that neither sticks nor buckles by then counts as
-    # stable (the default of `critical_velocity`, `critical_load` and the curves; not abstract)
+    # the horizon of a critical-velocity search's runs [s] (sine velocity): a run that neither sticks
+    # nor buckles by then counts as stable (the default of `critical_velocity` and `boundary_curve`; not
+    # abstract; `critical_load` keeps 2 s)
     search_horizon: ClassVar[float] = 2.0
     # lanes of a sweep's continuous batch (`jaxrod.sweep`; `None`: the batching default)
     sweep_lanes: eqx.AbstractClassVar[int | None]

@@ -378,7 +378,7 @@ class Rod3D(AbstractModel):
     size_name: ClassVar[str] = "segments"
     min_size: ClassVar[int] = 4
     search_method: ClassVar[str] = "bisection"  # the departure rate is opt-in (`boundary.search`)
-    # a search's horizon [s]: E3's buckled runs near the boundary cross by 0.13 s at 500 segments,
+    # a critical-velocity search's horizon [s]: E3's buckled runs near the boundary cross by 0.13 s at 500 segments,
     # and the stable end of each bracket stays stable to 2 s (docs/rod3d.md, benchmarks/rod3d_commands.py)
     search_horizon: ClassVar[float] = 0.4
     sweep_lanes: ClassVar[int] = 1  # a lane per core: its steps are large enough to fill one
