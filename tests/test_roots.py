@@ -309,3 +309,16 @@ def test_expanding_bisection_reports_failures_in_its_result():
     assert int(res.result) == bd.ROOT_RESULTS.invalid_bracket and float(res.lo) == pytest.approx(1e-3)
     res = bd.expanding_bisection(lambda x: x > 0.37, 1.0, rtol=1e-6, max_iter=6, floor=1e-3, ceiling=10.0)
     assert int(res.result) == bd.ROOT_RESULTS.max_iterations and int(res.evaluations) == 6
+
+
+def test_a_curve_of_the_3d_rod_runs_to_its_search_horizon(monkeypatch):
+    """`boundary_curve` without `t1` runs the 3D rod's labels to `Rod3D.search_horizon` (0.4 s, the
+    horizon its E3 brackets were checked at against 2 s) and a given `t1` as given."""
+    from jaxrod.boundary import search
+    from jaxrod.rod3d import Rod3D
+
+    seen = []
+    monkeypatch.setattr(search, "_seeded_bisection", lambda *a, **kw: seen.append(kw["t1"]))
+    bd.boundary_curve(ROD, [5.0], model="rod3d")
+    bd.boundary_curve(ROD, [5.0], model="rod3d", t1=1.5)
+    assert seen == [Rod3D.search_horizon, 1.5] and Rod3D.search_horizon == 0.4
