@@ -26,7 +26,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from .._banded import block_tridiagonal_factor, block_tridiagonal_factor_solve
+from .._banded import block_tridiagonal_factor, block_tridiagonal_factor_solve, block_tridiagonal_solve
 from . import components as c3
 from .contact import _arm, node_weights
 from .energy import _penetration
@@ -216,26 +216,27 @@ def _newton(A_D, A_U, rhs, ga, gb, u0, rho, safe_rho, bound, active, lam0, was_s
         Pm = jnp.where(active[:, None, None], Pm, 0.0)
         return u, stick, F_lam, Pm, inv
 
+    def residual(F_lam):
+        return jnp.max(jnp.sqrt(jnp.sum(F_lam * F_lam, -1))) / scale
+
     def body(carry):
-        y, lam, k, _, _ = carry
-        u, stick, F_lam, Pm, inv = linearised(y, lam)
+        y, lam, k, _, lin = carry
+        _, _, F_lam, Pm, inv = lin
         K = r[:, :, None] * jnp.einsum("kab,kbc->kac", inv, Pm)
-        F_y = jnp.zeros_like(y)  # the y equation holds at every iterate (each step keeps it)
         AD, AU = _with_contacts(A_D, A_U, ga, gb, K)
+        # the y equation holds at every iterate (the start solves it, each step keeps it): F_y = 0
         g = jnp.einsum("kab,kb->ka", inv, F_lam)
-        dy = block_tridiagonal_factor_solve(block_tridiagonal_factor(AD, AU), AU, -F_y + _apply_rows_t(ga, gb, g))
+        dy = block_tridiagonal_solve(AD, AU, _apply_rows_t(ga, gb, g))  # one matrix, one right-hand side
         dlam = jnp.einsum("kab,kb->ka", inv, r * jnp.einsum("kab,kb->ka", Pm, _apply_rows(ga, gb, dy)) - F_lam)
         y, lam = y + dy, jnp.where(active[:, None], lam + dlam, 0.0)
-        _, stick, F_lam, _, _ = linearised(y, lam)
-        res = jnp.max(jnp.sqrt(jnp.sum(F_lam * F_lam, -1))) / scale
-        return y, lam, k + 1, res, stick
+        lin = linearised(y, lam)
+        return y, lam, k + 1, residual(lin[2]), lin
 
     def more(carry):
         return (carry[2] == 0) | ((carry[2] < max_iter) & (carry[3] > tol))
 
     # the start: λ from the last step, y solving its y equation
-    AD0, AU0 = _with_contacts(A_D, A_U, ga, gb, jnp.zeros((rhs.shape[0], 2, 2), dtype))
-    y0 = block_tridiagonal_factor_solve(block_tridiagonal_factor(AD0, AU0), AU0, rhs - _apply_rows_t(ga, gb, lam0))
-    y, lam, k, res, stick = jax.lax.while_loop(more, body, (y0, lam0, jnp.array(0), jnp.asarray(jnp.inf, dtype),
-                                                           was_stuck & active))
-    return y, lam, stick, k, res
+    y0 = block_tridiagonal_solve(A_D, A_U, rhs - _apply_rows_t(ga, gb, lam0))
+    lin0 = linearised(y0, lam0)
+    y, lam, k, res, lin = jax.lax.while_loop(more, body, (y0, lam0, jnp.array(0), residual(lin0[2]), lin0))
+    return y, lam, lin[1], k, res
