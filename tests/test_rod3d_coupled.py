@@ -62,20 +62,21 @@ def _contact_jacobian(model, q):
     return G
 
 
-@pytest.mark.parametrize("v0, spin", [(0.02, 0.0), (0.002, 40.0)])
-def test_the_impulses_satisfy_coulomb_at_the_velocities_of_the_coupled_system(v0, spin):
+@pytest.mark.parametrize("v0, spin, method", [(0.02, 0.0, "newton"), (0.002, 40.0, "newton"), (0.02, 0.0, "admm")])
+def test_the_impulses_satisfy_coulomb_at_the_velocities_of_the_coupled_system(v0, spin, method):
     """One kick of 100× the explicit limit on an 8-segment rod on the wall (μ_s = μ_d = 0.3),
     moving along the wall (and spinning): with p the impulses the solve returns (force × hk),
     A Δv = rhs + Gᵀp on the free unknowns to rounding (A, rhs and G rebuilt densely from their
     definitions), and at every contact ‖p‖ ≤ μ N hk, with a stuck contact's slip G v zero and a
-    sliding one's impulse μ N hk against its slip, to the solve's tolerance."""
+    sliding one's impulse μ N hk against its slip, to the solve's tolerance; by Newton (a few
+    iterations) and by ADMM."""
     rod = jr.RodChannel.reference(0.3)
     model = Rod3D(rod, 8, control="load", end_load=2.0, friction_tol=1e-8)
     q, v = model.initial_state(None, lateral_velocity=sine_velocity(model, v0))
     w = np.random.default_rng(1).normal(size=v.w.shape) * spin
     v = type(v)(v.v, jnp.where(jnp.asarray(held_pattern(model)[1]), 0.0, jnp.asarray(w)), v.stuck, v.force, v.residual, v.sweeps)
     h = float(100 * step_limit(model))
-    a, out, _ = _kick(model, q, v, h, h, max_iter=2000)
+    a, out, _ = _kick(model, q, v, h, h, max_iter=2000, method=method)
     assert int(out.sweeps) < 2000
 
     A, rhs, vel, free = _dense_system(model, q, v, a, h, h, 0.1)

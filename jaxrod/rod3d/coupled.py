@@ -13,12 +13,12 @@ and applies it through M⁻¹ after the kick: near a contact whose neighbours ar
 springs, it holds forces far above μ_s N, and at large steps the impulses it applies excite the
 stiff axial and bending modes that the next kick does not damp.
 
-The velocity form is the convex problem  min_v ½‖v − v*‖²_A + Σ bᵢ ‖Gᵢ v‖, solved by ADMM on
-zᵢ = Gᵢ v (`_admm`): each iteration one solve with the factor of A + Σρᵢ GᵢᵀGᵢ, which is block
-tridiagonal like A (a contact couples node i with segments i − 1 and i), so the step factors one
-matrix, as the kick alone does; the z update is the exact shrinkage (z = 0 inside the cone: the
-stick set), the multipliers are the impulses (p = −λ), warm-started from the last step's forces.
-ρᵢ = the geometric mean of the contact's own-mass and stiffness-diagonal effective masses.
+The velocity form is the convex problem  min_v ½‖v − v*‖²_A + Σ bᵢ ‖Gᵢ v‖. `coupled_kick` solves
+it by semismooth Newton on Alart–Curnier's equations (`_newton`, the default: each iteration one
+block-tridiagonal system, A + Σ GᵢᵀKᵢGᵢ, since a contact couples node i with segments i − 1 and
+i; 2–7 iterations a step on E3's runs) or by ADMM on zᵢ = Gᵢ v (`_admm`: one factorisation, a
+solve an iteration, 100 and more iterations there; benchmarks/README.md). The multipliers are the
+impulses (p = −λ), warm-started from the last step's forces; stick is exact to `friction_tol`.
 """
 
 from __future__ import annotations
@@ -81,10 +81,12 @@ def _shrink(w, radius):
 def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter: int = 200, tol=None, relax: float = 1.6,
                  method: str = "newton"):
     """The implicit kick of `hk` [s] in a step of `h` [s] with the wall friction solved on the
-    coupled operator (module docstring). **Returns:** `(v_new, v_trial, impulse)`: the velocity
-    after kick and friction (its `stuck`, `force` [N], `residual` and `sweeps`: the ADMM's last
-    relative change and iterations), `v_trial` = v_new − M⁻¹Gᵀp (what `impulse_work` reads the
-    friction impulse from) and the damping's impulse by blocks (as `implicit_kick`'s)."""
+    coupled operator (module docstring), by `method` (`"newton"` or `"admm"`) to `tol` (default
+    the model's `friction_tol`) in at most `max_iter` iterations (`relax`: the ADMM's
+    over-relaxation). **Returns:** `(v_new, v_trial, impulse)`: the velocity after kick and
+    friction (its `stuck`, `force` [N], `residual` and `sweeps`: the solve's last relative
+    residual and iterations), `v_trial` = v_new − M⁻¹Gᵀp (what `impulse_work` reads the friction
+    impulse from) and the damping's impulse by blocks (as `implicit_kick`'s)."""
     dtype = v.v.dtype
     tol = model.friction_tol.astype(dtype) if tol is None else tol
     D, U = _stacked(*_assembled(model, q.x, q.Q, tuple(beta + gamma * d for d in DAMPED), beta))
