@@ -77,7 +77,7 @@ def test_the_impulses_satisfy_coulomb_at_the_velocities_of_the_coupled_system(v0
     v = type(v)(v.v, jnp.where(jnp.asarray(held_pattern(model)[1]), 0.0, jnp.asarray(w)), v.stuck, v.force, v.residual, v.sweeps)
     h = float(100 * step_limit(model))
     a, out, _ = _kick(model, q, v, h, h, max_iter=2000, method=method)
-    assert int(out.sweeps) < 2000
+    assert int(out.sweeps) < (8 if method == "newton" else 2000)
 
     A, rhs, vel, free = _dense_system(model, q, v, a, h, h, 0.1)
     G = _contact_jacobian(model, q)
