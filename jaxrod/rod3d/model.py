@@ -66,8 +66,9 @@ class Rod3D(AbstractModel):
     - `far_load`: with displacement control, node 0 free along x and held back by this dead load
       [N] (the rod slides against it: a bit on a rock); `None` (default): node 0 held (static).
     - `contact_stiffness`: Hertz constant k [N/m^2.5] per length; default: the rod sinks δ₀ = 1e-3·R
-      under its weight, k = w/δ₀^{3/2}. The straight rod wrinkles into the wall once F²/(4EI) >
-      1.5w/δ₀ (≈ 50 N for the reference rod): stiffen the wall for larger loads (docs/rod3d.md).
+      under its weight, k = w/δ₀^{3/2}. Past `wrinkling_load`, F²/(4EI) > 1.5w/δ₀ (≈ 50 N for the
+      reference rod), the straight rod would wrinkle into the wall but for the friction at the
+      contact point, which the implicit scheme's local pass does not hold (docs/rod3d.md).
     - `contact_damping`: Hunt–Crossley ζ [s/m], ≥ 0 (default 0: energy is conserved at μ = 0).
     - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (default 0).
     - `rotary_scale`: α ≥ 1 on the transverse rotary inertia (default: see module docstring).
