@@ -73,13 +73,14 @@ def stability_map(
     mode: int = 6,
     out: str | None = "out/map",
     progress: bool = True,
-    t1: float = 2.0,
+    t1: float | None = None,
     curve_rtol: float | None = 1e-3,
     chunk_size: int | None = None,
 ) -> dict:
     """Classify the reference rod straight/buckled over the grid `dF` × `v0` for every μ in
     `mus` (sine mode-`mode` velocity perturbation), fit the boundary, and write `map.png`,
-    `map.csv`, `map.json` and one resumable sweep folder per μ under `out`. For μ > 0 and the
+    `map.csv`, `map.json` and one resumable sweep folder per μ under `out`; each run to `t1` [s]
+    (default: the model's `search_horizon`, 2 s, the 3D rod 0.4 s). For μ > 0 and the
     field or Galerkin model the boundary is also searched directly at every load of the grid
     ([`jaxrod.boundary.boundary_curve`][] at the map's n and dt, to `curve_rtol`; `None`: not)
     and drawn over the grid.
@@ -96,6 +97,8 @@ def stability_map(
 
     main = jax.process_index() == 0
     progress = progress and main
+    if t1 is None:  # the horizon a boundary search of this model runs to (2 s; the 3D rod 0.4 s)
+        t1 = model_class(model).search_horizon
     dF = np.asarray(dF, float)
     v0 = np.asarray(v0, float)
     results = {}

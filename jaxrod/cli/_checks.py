@@ -50,7 +50,8 @@ def _check_map(args) -> None:
     check_mu(args)
     if np.any(args.v0 <= 0):
         _fail(f"argument --v0: velocities must be > 0 m/s, got {float(args.v0.min())!r}.")
-    _positive("--t1", args.t1, "s")
+    if args.t1 is not None:
+        _positive("--t1", args.t1, "s")
 
 
 def _check_boundary(args) -> None:

@@ -64,7 +64,8 @@ def register(sub) -> None:
     mp.add_argument("--model", choices=[*model_names(), "auto"], default="field",
                     help="auto: the cheapest adequate model, from the measured table (jaxrod.model_choice)")
     mp.add_argument("--n", type=_positive_int, default=None, help="nodes / modes (default: by the largest load)")
-    mp.add_argument("--t1", type=_finite_float, default=2.0, help="horizon [s] (default 2)")
+    mp.add_argument("--t1", type=_finite_float, default=None,
+                    help="horizon [s] (default: the model's, 2 s; rod3d 0.4 s)")
     mp.add_argument("--out", default="out/map", help="output folder (default: out/map under the working folder)")
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
     mp.add_argument("--no-curve", dest="no_curve", action="store_true",
