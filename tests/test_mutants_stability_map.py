@@ -328,3 +328,26 @@ def test_buckles_for_every_positive_load_looks_at_every_positive_load():
     assert sm._summarise(res, dF, np.array([1e-3, 1e-2]), 0.3)["buckles_for_every_dF_gt_0"] is False
     res.outputs["buckled"][0] = True
     assert sm._summarise(res, dF, np.array([1e-3, 1e-2]), 0.3)["buckles_for_every_dF_gt_0"] is True
+
+
+def test_a_map_runs_to_its_models_search_horizon_unless_given_one(monkeypatch):
+    """`stability_map` without `t1` sweeps each model to its `search_horizon` (the field model 2 s,
+    the 3D rod 0.4 s), and a given `t1` as given."""
+    import pytest
+
+    from jaxrod import stability_map as sm
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def fake_sweep(spec, grid, **kw):
+        seen.append((spec.model, spec.t1))
+        raise Stop
+
+    monkeypatch.setattr(sm, "sweep", fake_sweep)
+    for model, t1 in (("field", None), ("rod3d", None), ("rod3d", 1.0)):
+        with pytest.raises(Stop):
+            sm.stability_map((0.3,), model=model, out=None, progress=False, t1=t1)
+    assert seen == [("field", 2.0), ("rod3d", 0.4), ("rod3d", 1.0)]
