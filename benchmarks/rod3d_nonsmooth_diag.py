@@ -40,10 +40,10 @@ from jaxrod.integrators import SCHEMES, ImplicitLeapfrog  # noqa: E402
 from jaxrod.rod3d import Rod3D, sine_velocity  # noqa: E402
 
 
-def _scheme(name, gamma=0.1):
+def _scheme(name, damping=0.1):
     class Chosen(ImplicitLeapfrog):
         coupled: bool = eqx.field(static=True, default=name == "coupled")
-        gamma: float = eqx.field(static=True, default=gamma)  # noqa: F811
+        gamma: float = eqx.field(static=True, default=damping)
 
     return Chosen
 
