@@ -33,8 +33,11 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
     block-tridiagonal solve, `jaxrod.rod3d.hessian`). The friction pass sees each contact's own
     mass (as in the explicit scheme), not the stiffness that couples it to its neighbours within
     the step: the coupling acts at the next step, a first-order splitting error at stick–slip
-    events. (Putting the friction into the solve, an active-set Coulomb law through the coupled
-    system, was tried: it left v₀* unchanged with γ and did not make γ = 0 accurate.)
+    events, and past the wall's wrinkling load it lets the 3D rod wrinkle (its runs there end with
+    the result code `inadequate`). With `coupled=True` the kick and the friction are solved
+    together on the step's operator (`model.coupled_kick`, `jaxrod.rod3d.coupled`): right past
+    the wrinkling load, 3–5 times the cost of a step at 500 segments, and no closer to the explicit
+    scheme elsewhere (docs/rod3d.md, "Where the implicit step fails").
 
     **Arguments:**
 
@@ -42,6 +45,8 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
     - `friction`: the friction law (default [`jaxrod.Coulomb`][]).
     - `beta`: Newmark's β (static, in [0, 1], default ¼).
     - `gamma`: the numerical damping γ (static, ≥ 0, default 0.1; 0: none, energy kept).
+    - `coupled`: solve the friction with the kick on the step's operator (static, default
+      `False`: the local friction pass after the kick).
     """
 
     beta: float = eqx.field(static=True, default=0.25)
