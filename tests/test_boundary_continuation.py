@@ -1,4 +1,4 @@
-"""The continuation along a boundary curve (`jaxrod.boundary.search._along_curve`), with a
+"""The continuation along a boundary curve (`jaxrod.boundary.curves._along_curve`), with a
 stand-in search whose root is known: the points are searched in increasing order, each started
 at the prediction from the roots before it, inside a factor-4 bracket around the prediction; a
 bracket that misses the root is searched again over the full bracket, and both searches'
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from jaxrod.boundary.roots import ROOT_RESULTS
-from jaxrod.boundary.search import _along_curve, _predict
+from jaxrod.boundary.curves import _along_curve, _predict
 
 
 class _Res(eqx.Module):

@@ -288,7 +288,7 @@ def test_a_load_search_without_n_takes_the_nodes_its_perturbation_needs_at_the_l
 def test_a_curve_searched_at_once_without_n_takes_the_resolution_of_its_largest_load(monkeypatch):
     """`boundary_curve(continuation=False)` with no `n`/`dt` searches every load with the field
     nodes and step of the scene at its largest load (one compiled search)."""
-    from jaxrod.boundary import search as S
+    from jaxrod.boundary import curves as S
 
     def stand_in(rod, dF, **kw):
         raise _Seen(kw["n"], kw["dt"])

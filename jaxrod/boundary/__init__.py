@@ -1,8 +1,8 @@
 r"""Gradient-based search for the stable-zone boundary and the critical load.
 
 The package: `indicators` (the functions whose roots are the boundary), `roots` (the solver,
-continuation, implicit sensitivities), `search` (`critical_velocity`, `critical_load` and curves
-of them).
+continuation, implicit sensitivities), `search` (`critical_velocity`, `critical_load`: one point
+each) and `curves` (`boundary_curve`, `critical_load_curve`).
 
 **The indicator.** A root finder needs a function of the searched value x (the perturbation
 amplitude, or the load) that changes sign at the boundary and says how far away it is.
@@ -48,8 +48,8 @@ from .indicators import departure_sensitivities as departure_sensitivities
 from .indicators import smooth_single_mode_indicator as smooth_single_mode_indicator
 from .search import critical_velocity as critical_velocity
 from .search import critical_load as critical_load
-from .search import boundary_curve as boundary_curve
-from .search import critical_load_curve as critical_load_curve
+from .curves import boundary_curve as boundary_curve
+from .curves import critical_load_curve as critical_load_curve
 from .search import METHODS as METHODS
 
 __all__ = ['ROOT_RESULTS', 'RootResult', 'safeguarded_newton', 'departure_secant', 'bisection', 'expanding_bisection', 'implicit_sensitivities', 'continuation', 'single_mode_indicator', 'rod_indicator', 'run_label', 'crossing_state', 'departure_rate', 'departure_sensitivities', 'smooth_single_mode_indicator', 'METHODS', 'critical_velocity', 'critical_load', 'boundary_curve', 'critical_load_curve']

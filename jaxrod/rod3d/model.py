@@ -16,7 +16,6 @@ import copy
 from typing import ClassVar
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
@@ -66,9 +65,8 @@ class Rod3D(AbstractModel):
     - `far_load`: with displacement control, node 0 free along x and held back by this dead load
       [N] (the rod slides against it: a bit on a rock); `None` (default): node 0 held (static).
     - `contact_stiffness`: Hertz constant k [N/m^2.5] per length; default: the rod sinks δ₀ = 1e-3·R
-      under its weight, k = w/δ₀^{3/2}. Past `wrinkling_load`, F²/(4EI) > 1.5w/δ₀ (≈ 50 N for the
-      reference rod), the straight rod would wrinkle into the wall but for the friction at the
-      contact point, which the implicit scheme's local pass does not hold (docs/rod3d.md).
+      under its weight, k = w/δ₀^{3/2}. Past `wrinkling_load` (≈ 50 N for the reference rod) only the
+      friction at the contact point keeps the rod from wrinkling into the wall (docs/rod3d.md).
     - `contact_damping`: Hunt–Crossley ζ [s/m], ≥ 0 (default 0: energy is conserved at μ = 0).
     - `damping`: mass-proportional viscous damping [1/s] on translations, ≥ 0 (default 0).
     - `rotary_scale`: α ≥ 1 on the transverse rotary inertia (default: see module docstring).
@@ -322,15 +320,7 @@ class Rod3D(AbstractModel):
 
     static_sag = state.static_sag  # the rod's sink into the wall under its weight [m] (`state.static_sag`)
     wrinkling_load = state.wrinkling_load  # the axial force [N] past which the straight rod wrinkles into the wall
-
-    def implicit_inadequate(self, coupled: bool):
-        """Whether [`jaxrod.ImplicitLeapfrog`][] is outside its measured range on this rod: with
-        the local friction pass (`coupled=False`), friction at the contact point and the straight
-        rod's axial force past `wrinkling_load`, where at the default step every amplitude
-        buckles (docs/rod3d.md); its runs end with the result code `inadequate`."""
-        if coupled or self.friction_at != "surface":
-            return jnp.array(False)
-        return self.axial_preload() > self.wrinkling_load()
+    implicit_inadequate = state.implicit_inadequate  # (coupled) -> `ImplicitLeapfrog` outside its measured range here
     initial_state = straight_state  # (F=None, lateral_velocity=None, lateral_offset=None) -> (q0, v0)
 
     # -- where a perturbation field is given (the AbstractModel interface) -------------------
@@ -360,11 +350,7 @@ class Rod3D(AbstractModel):
         lateral = jnp.stack([0.0 * force, force, 0.0 * force], -1)
         return eqx.tree_at(lambda m: m.body_force, self, energy._body_force(self) + lateral)
 
-    def perturbed_state(self, offset, velocity) -> tuple[Rod3DPosition, Rod3DVelocity]:
-        """The straight rod compressed to `axial_preload()` [N] (the dead load, or the preload of
-        held ends), displaced along the wall by `offset` [m] and moving along it at `velocity`
-        [m/s] at its nodes (see `initial_state`)."""
-        return self.initial_state(None, lateral_velocity=velocity, lateral_offset=offset)
+    perturbed_state = lambda self, offset, velocity: self.initial_state(None, lateral_velocity=velocity, lateral_offset=offset)
 
     # -- the rest of the interface: the fixed-step schemes only (friction is an impulse pass) -------
     def friction_acceleration(self, friction, v, t):
@@ -379,9 +365,7 @@ class Rod3D(AbstractModel):
     size_name: ClassVar[str] = "segments"
     min_size: ClassVar[int] = 4
     search_method: ClassVar[str] = "bisection"  # the departure rate is opt-in (`boundary.search`)
-    # a critical-velocity search's horizon [s]: E3's buckled runs near the boundary cross by 0.13 s at 500 segments,
-    # and the stable end of each bracket stays stable to 2 s (docs/rod3d.md, benchmarks/rod3d_commands.py)
-    search_horizon: ClassVar[float] = 0.4
+    search_horizon: ClassVar[float] = 0.4  # E3's brackets keep their labels to 2 s (benchmarks/rod3d_commands.py)
     sweep_lanes: ClassVar[int] = 1  # a lane per core: its steps are large enough to fill one
     size = property(lambda self: self.n_segments)
 
@@ -395,20 +379,11 @@ class Rod3D(AbstractModel):
 
     @classmethod
     def scheme_under(cls, perturbation, rod=None, F=None) -> str | None:
-        """Its implicit default only under a perturbation measured adequate for it (`implicit_3d`)
-        and, where the rod and a concrete load `F` [N] are given, below the scene's rod's
-        `wrinkling_load` (past it the implicit scheme's local friction pass lets the rod wrinkle:
-        the explicit scheme runs)."""
-        if not type(perturbation).implicit_3d:
-            return "leapfrog"
-        if rod is not None and F is not None:
-            try:
-                past = float(F) > float(cls.for_scene(rod, F, cls.min_size, 1).wrinkling_load())
-            except jax.errors.ConcretizationTypeError:  # a traced load: the run's result code says it
-                past = False
-            if past:
-                return "leapfrog"
-        return None
+        """Its implicit default under a perturbation measured adequate for it (`implicit_3d`) and
+        below the wall's wrinkling load (`state.past_wrinkling`, where `rod` and a load `F` [N]
+        are given), else the explicit leapfrog."""
+        past = rod is not None and F is not None and state.past_wrinkling(cls.for_scene(rod, F, cls.min_size, 1))
+        return None if type(perturbation).implicit_3d and not past else "leapfrog"
 
     @classmethod
     def bytes_per_member(cls, size: int | None) -> int:
@@ -418,11 +393,8 @@ class Rod3D(AbstractModel):
     scene_step = lambda self, rod, F, scheme_step: scheme_step(self)  # its scheme's default step
     initial_state_under = lambda self, perturbation, integrator, grid: perturbation.initial_state(self, integrator)
 
-    def field_of(self, q):
-        return jnp.linspace(0.0, self.rod.L, self.n + 1), self.theta(q.x)
-
-    def dominant_mode(self, q):
-        return dominant_mode(wall_angle(q.x)[..., 1:-1])
+    field_of = lambda self, q: (jnp.linspace(0.0, self.rod.L, self.n + 1), self.theta(q.x))  # (s [m], θ [rad])
+    dominant_mode = lambda self, q: dominant_mode(wall_angle(q.x)[..., 1:-1])
 
     theta = staticmethod(wall_angle)  # (x) -> each node's angle from the channel bottom [rad], θ of the field model
     axial_force = energy.axial_force  # (x, Q) -> each segment's compressive axial force −EA σ₃ [N]

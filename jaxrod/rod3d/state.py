@@ -4,6 +4,7 @@ the forces a kick needs."""
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
@@ -106,6 +107,26 @@ def wrinkling_load(model):
     k_w = 1.5 * model.contact_stiffness * jnp.sqrt(static_sag(model))
     F_w = 2.0 * jnp.sqrt(model.rod.EI * k_w)
     return F_w if model.channel and model.gravity else jnp.full_like(F_w, jnp.inf)
+
+
+def past_wrinkling(model) -> bool:
+    """Whether the straight rod's axial force (`axial_preload`) is past `wrinkling_load`, for
+    concrete numbers; `False` for traced ones (a run of the implicit scheme there then ends with
+    the result code `inadequate`, `implicit_inadequate`)."""
+    try:
+        return float(axial_preload(model)) > float(wrinkling_load(model))
+    except jax.errors.ConcretizationTypeError:
+        return False
+
+
+def implicit_inadequate(model, coupled: bool):
+    """Whether [`jaxrod.ImplicitLeapfrog`][] is outside its measured range on this rod (a traced
+    bool): with the local friction pass (`coupled=False`), friction at the contact point and the
+    straight rod's axial force past `wrinkling_load`, where at the default step every amplitude
+    buckled (docs/rod3d.md); its runs end with the result code `inadequate`."""
+    if coupled or model.friction_at != "surface":
+        return jnp.array(False)
+    return axial_preload(model) > wrinkling_load(model)
 
 
 def straight_state(model, F: ArrayLike | None = None, lateral_velocity=None, lateral_offset=None):
