@@ -36,7 +36,7 @@ class ImplicitLeapfrog(ProjectedLeapfrog):
     events, and past the wall's wrinkling load it lets the 3D rod wrinkle (its runs there end with
     the result code `inadequate`). With `coupled=True` the kick and the friction are solved
     together on the step's operator (`model.coupled_kick`, `jaxrod.rod3d.coupled`): right past
-    the wrinkling load, 3–5 times the cost of a step at 500 segments, and no closer to the explicit
+    the wrinkling load, several times the cost of a step at 500 segments, and no closer to the explicit
     scheme elsewhere (docs/rod3d.md, "Where the implicit step fails").
 
     **Arguments:**

@@ -30,7 +30,7 @@ from .._banded import block_tridiagonal_factor, block_tridiagonal_factor_solve, 
 from . import components as c3
 from .contact import _arm, node_weights
 from .energy import _penetration
-from .hessian import DAMPED, _assembled, _block_masses, _blocks_of, _component_matvec, _free, _stacked
+from .hessian import damping_impulse, kick_system
 from .state import Rod3DVelocity
 
 __all__ = ["coupled_kick"]
@@ -89,19 +89,8 @@ def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter
     impulse from) and the damping's impulse by blocks (as `implicit_kick`'s)."""
     dtype = v.v.dtype
     tol = model.friction_tol.astype(dtype) if tol is None else tol
-    D, U = _stacked(*_assembled(model, q.x, q.Q, tuple(beta + gamma * d for d in DAMPED), beta))
-    free = _free(model, dtype)
-    s = free / jnp.sqrt(_block_masses(model, dtype))
-    c = h * h
-    A_D = c * (s[:, :, None] * D * s[:, None, :]) + jnp.eye(6, dtype=dtype)[None]
-    A_U = c * (s[:-1, :, None] * U * s[1:, None, :])
-    gyro = c3.pack(c3.gyroscopic(c3.unpack(model.inertia), c3.unpack(v.w)))
-    torque = jnp.concatenate([a.tau - gyro, jnp.zeros((1, 3), dtype)])
-    rhs = hk * s * jnp.concatenate([a.f, torque], -1)
-    vel = jnp.where(s > 0, _blocks_of(v), 0.0)
-    if gamma:
-        Hd = _assembled(model, q.x, q.Q, DAMPED, 0.0)
-        rhs = rhs - gamma * h * hk * s * _component_matvec(*Hd, vel)
+    system = kick_system(model, q, v, a, hk, h, beta, gamma)
+    A_D, A_U, rhs, s = system.A_D, system.A_U, system.rhs, system.s
 
     # the contacts
     ga, gb, T, R, L = _contact_rows(model, q, s)
@@ -136,8 +125,7 @@ def coupled_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, max_iter
     # M⁻¹Gᵀλ = S (G̃ᵀλ): the trial velocity the friction impulse p = −λ took to v_new
     back = s * _apply_rows_t(ga, gb, lam)
     trial = Rod3DVelocity(out.v + back[:, :3], out.w + back[:-1, 3:], out.stuck, out.force, out.residual, out.sweeps)
-    impulse = jnp.where(s > 0, -gamma * h * _component_matvec(*Hd, hk * vel + h * step), 0.0) if gamma else jnp.zeros_like(vel)
-    return out, trial, impulse
+    return out, trial, damping_impulse(system, gamma, hk, h, step)
 
 
 def _with_contacts(A_D, A_U, ga, gb, K):

@@ -39,9 +39,12 @@ follows the kick as in the explicit scheme.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array
 
 from .._banded import block_tridiagonal_solve
 from . import components as c3
@@ -49,7 +52,8 @@ from .energy import _penetration
 from .so3 import skew
 from .state import Rod3DVelocity, held_pattern
 
-__all__ = ["IMPLICIT_DT", "damping_loss", "hessian_blocks", "hessian_blocks_ad", "implicit_kick"]
+__all__ = ["IMPLICIT_DT", "KickSystem", "damping_impulse", "damping_loss", "hessian_blocks", "hessian_blocks_ad",
+           "implicit_kick", "kick_system"]
 
 IMPLICIT_DT = 5e-5
 """The implicit leapfrog's default step for the 3D rod [s] (`Rod3D.implicit_step`): set by
@@ -271,14 +275,24 @@ def _free(model, dtype):
     return jnp.concatenate([jnp.asarray(~held_n, dtype), free_s], -1)
 
 
-def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_impulse: bool = False):
-    """The kick of `hk` [s] of the implicit leapfrog of step `h` [s] (module docstring):
-    Δ = (M + β h² H(q) + γ h² H_d(q))⁻¹ (hk (f, τ − ω × Jω) − γ h hk H_d v) on the free degrees of
-    freedom (H_d: shear, bend and twist), in units scaled by M^{−½}. Held degrees of freedom keep their
-    prescribed values. A matrix that is not positive definite (a step far past what the
-    compressed rod allows) gives a non-finite state, which the run reports. With `with_impulse`,
-    also the damping's impulse P = −γ h H_d (hk v + h Δ) by blocks (n + 1, 6) [N·s, N·m·s]
-    (`damping_loss`; zeros with γ = 0)."""
+class KickSystem(NamedTuple):
+    """Newmark's system of one kick in units scaled by M^{−½} (`kick_system`): the blocks `A_D`,
+    `A_U` of I + h² S(βH + γH_d)S, the right-hand side `rhs`, the scaling `s` (M^{−½} on the free
+    unknowns, 0 elsewhere), the carried velocity by blocks `vel` (0 where held) and the damped
+    stiffness `Hd` (`None` with γ = 0)."""
+
+    A_D: Array
+    A_U: Array
+    rhs: Array
+    s: Array
+    vel: Array
+    Hd: tuple | None
+
+
+def kick_system(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0) -> KickSystem:
+    """The system of the kick of `hk` [s] in a step of `h` [s] (module docstring):
+    (M + β h² H(q) + γ h² H_d(q)) Δ = hk (f, τ − ω × Jω) − γ h hk H_d v on the free degrees of
+    freedom (H_d: shear, bend and twist), scaled by M^{−½} (Δ = s·y for the solution y)."""
     dtype = v.v.dtype
     # β H + γ H_d in one pass (each piece is linear in the stiffnesses), H_d for the damping force
     D, U = _stacked(*_assembled(model, q.x, q.Q, tuple(beta + gamma * d for d in DAMPED), beta))
@@ -292,16 +306,35 @@ def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_im
     rhs = hk * s * jnp.concatenate([a.f, torque], -1)
     A_D, A_U = c * Ds + jnp.eye(6, dtype=dtype)[None], c * Us
     vel = jnp.where(s > 0, _blocks_of(v), 0.0)
+    Hd = None
     if gamma:  # the damping γ h H_d v of the shear, bend and twist strains, implicit (its matrix is in A)
         Hd = _assembled(model, q.x, q.Q, DAMPED, 0.0)
         rhs = rhs - gamma * h * hk * s * _component_matvec(*Hd, vel)
-    step = s * block_tridiagonal_solve(A_D, A_U, rhs)
+    return KickSystem(A_D, A_U, rhs, s, vel, Hd)
+
+
+def damping_impulse(system: KickSystem, gamma, hk, h, step):
+    """The damping's impulse P = −γ h H_d (hk v + h Δ) by blocks (n + 1, 6) [N·s, N·m·s] of a kick
+    whose change is `step` (`damping_loss`; zeros with γ = 0)."""
+    if not gamma:
+        return jnp.zeros_like(system.vel)
+    return jnp.where(system.s > 0, -gamma * h * _component_matvec(*system.Hd, hk * system.vel + h * step), 0.0)
+
+
+def implicit_kick(model, q, v: Rod3DVelocity, a, hk, h, beta, gamma=0.0, with_impulse: bool = False):
+    """The kick of `hk` [s] of the implicit leapfrog of step `h` [s] (module docstring):
+    Δ = (M + β h² H(q) + γ h² H_d(q))⁻¹ (hk (f, τ − ω × Jω) − γ h hk H_d v) on the free degrees of
+    freedom (`kick_system`). Held degrees of freedom keep their
+    prescribed values. A matrix that is not positive definite (a step far past what the
+    compressed rod allows) gives a non-finite state, which the run reports. With `with_impulse`,
+    also the damping's impulse (`damping_impulse`)."""
+    system = kick_system(model, q, v, a, hk, h, beta, gamma)
+    step = system.s * block_tridiagonal_solve(system.A_D, system.A_U, system.rhs)
     vn, w = model.constrain(v.v + step[:, :3], v.w + step[:-1, 3:])
     out = Rod3DVelocity(vn, w, v.stuck, v.force, v.residual, v.sweeps)
     if not with_impulse:
         return out
-    impulse = jnp.where(s > 0, -gamma * h * _component_matvec(*Hd, hk * vel + h * step), 0.0) if gamma else jnp.zeros_like(vel)
-    return out, impulse
+    return out, damping_impulse(system, gamma, hk, h, step)
 
 
 def damping_loss(model, v_prev: Rod3DVelocity, v_after: Rod3DVelocity, impulse):

@@ -114,9 +114,13 @@ def past_wrinkling(model) -> bool:
     concrete numbers; `False` for traced ones (a run of the implicit scheme there then ends with
     the result code `inadequate`, `implicit_inadequate`)."""
     try:
-        return float(axial_preload(model)) > float(wrinkling_load(model))
+        return bool(_past_wrinkling(model))
     except jax.errors.ConcretizationTypeError:
         return False
+
+
+def _past_wrinkling(model):
+    return axial_preload(model) > wrinkling_load(model)
 
 
 def implicit_inadequate(model, coupled: bool):
@@ -126,7 +130,7 @@ def implicit_inadequate(model, coupled: bool):
     buckled (docs/rod3d.md); its runs end with the result code `inadequate`."""
     if coupled or model.friction_at != "surface":
         return jnp.array(False)
-    return axial_preload(model) > wrinkling_load(model)
+    return _past_wrinkling(model)
 
 
 def straight_state(model, F: ArrayLike | None = None, lateral_velocity=None, lateral_offset=None):
