@@ -103,8 +103,8 @@ def child(scenes: list[str], repeats: int, loop_members: int) -> list[dict]:
             if scene == "e3":
                 # Python loop of single jitted runs of the same member function
                 flat = {k: np.repeat(v, 16) if k == "dF" else np.tile(v, 16) for k, v in inputs.items()}
-                n_, dt, grid_dt = _static_resolution(spec, flat)
-                member = jax.jit(_make_member(spec, n_, dt, grid_dt))
+                n_, dt, grid_dt, scheme = _static_resolution(spec, flat)
+                member = jax.jit(_make_member(spec, n_, dt, grid_dt, scheme))
                 key = jax.random.key(0)
                 pick = np.linspace(0, len(flat["dF"]) - 1, loop_members).astype(int)
                 jax.block_until_ready(member({k: np.float64(v[0]) for k, v in flat.items()}, 0, key))

@@ -11,7 +11,7 @@ import numpy as np
 from . import theory
 from .output import subplots, write_csv
 from .params import RodChannel
-from .registry import model_class
+from .registry import make_perturbation, model_class
 from .sweeps import SweepResult, SweepSpec, sweep
 
 __all__ = ["stability_map", "grid_boundary", "fit_power_law", "plot_maps"]
@@ -104,15 +104,15 @@ def stability_map(
     results = {}
     summary = {"model": model, "mode": mode, "t1": t1, "dF": dF.tolist(), "v0": v0.tolist(), "maps": {}}
     for mu in mus:
-        spec = SweepSpec(model=model, perturbation="sine", mu=float(mu), mode=mode, n=n, t1=t1)
         path = None if out is None else os.path.join(out, f"sweep_mu{mu:g}")
-        res = sweep(spec, {"dF": dF, "amplitude": v0}, path=path, progress=progress, chunk_size=chunk_size)
+        res = _map_sweep(float(mu), dF, v0, model, n, mode, t1, path, progress, chunk_size)
         results[mu] = res
         summary["maps"][f"{mu:g}"] = _summarise(res, dF, v0, float(mu))
         if curve_rtol is not None and mu > 0 and model_class(model).search_method == "departure":
             summary["maps"][f"{mu:g}"].update(_searched(res, dF, float(mu), model, mode, t1, curve_rtol, progress))
     summary["n"] = results[mus[0]].meta["n"]
     summary["dt"] = results[mus[0]].meta["dt"]
+    summary["schemes"] = results[mus[0]].meta["schemes"]
     if out is not None and main:
         os.makedirs(out, exist_ok=True)
         write_csv(os.path.join(out, "map.csv"), _map_rows(results))
@@ -120,6 +120,43 @@ def stability_map(
             json.dump(summary, fh, indent=1)
         plot_maps(results, summary, os.path.join(out, "map.png"))
     return summary
+
+
+def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size) -> SweepResult:
+    """The map's sweep at one μ: one sweep per run of columns that the model runs with one scheme
+    (`scheme_under` the sine perturbation at the column's load: the 3D rod's columns past the
+    wall's wrinkling load run the explicit leapfrog, the others its implicit step), at one size
+    (the model's default at the map's largest load), joined in column order; the later groups'
+    folders are `path` + `_dF<first load>`. `meta["schemes"]`: each group's first and last load
+    [N], scheme and step [s]."""
+    cls = model_class(model)
+    rod = RodChannel.reference(mu=mu)
+    F0 = float(theory.reference_load(rod))
+    pert = make_perturbation("sine", 1.0, mode)
+    keys = [cls.scheme_under(pert, rod, F0 + x) for x in dF]
+    starts = [j for j in range(len(dF)) if j == 0 or keys[j] != keys[j - 1]]
+    if len(starts) > 1 and n is None:
+        n = cls.default_size(rod, F0 + float(dF.max()), pert)
+    parts, groups = [], []
+    for a, b in zip(starts, starts[1:] + [len(dF)]):
+        spec = SweepSpec(model=model, perturbation="sine", mu=mu, mode=mode, n=n, t1=t1)
+        where = path if (a == 0 or path is None) else f"{path}_dF{dF[a]:g}"
+        part = sweep(spec, {"dF": dF[a:b], "amplitude": v0}, path=where, progress=progress, chunk_size=chunk_size)
+        parts.append(part)
+        groups.append({"dF_first": float(dF[a]), "dF_last": float(dF[b - 1]), "scheme": part.meta["scheme"],
+                       "dt": part.meta["dt"]})
+    res = parts[0] if len(parts) == 1 else _join_columns(parts, (len(dF), len(v0)))
+    res.meta["schemes"] = groups
+    return res
+
+
+def _join_columns(parts, shape) -> SweepResult:
+    """The sweeps of consecutive column groups of one (ΔF × v₀) grid as one result: members in
+    grid order, indexed as one sweep's."""
+    inputs = {k: np.concatenate([p.inputs[k] for p in parts]) for k in parts[0].inputs}
+    inputs["index"] = np.arange(len(inputs["index"]))
+    outputs = {k: np.concatenate([p.outputs[k] for p in parts]) for k in parts[0].outputs}
+    return SweepResult(inputs, outputs, shape, parts[0].names, {**parts[0].meta, "shape": list(shape)})
 
 
 def _summarise(res: SweepResult, dF, v0, mu) -> dict:
@@ -231,8 +268,11 @@ def plot_maps(results: dict, summary: dict, path: str | None = None):
             title += f"\nstraight up to ΔF = {s['largest_stable_dF_over_F0cr']:.1f} F⁰cr"
         ax.set_title(title, fontsize=10)  # pragma: no mutate
         ax.legend(fontsize=8, loc="lower left")  # pragma: no mutate
+    groups = summary.get("schemes") or [{"dt": summary["dt"]}]
+    steps = f"dt = {groups[0]['dt']:.2e} s" + "".join(
+        f", {g['scheme']} at {g['dt']:.2e} s from ΔF = {g['dF_first']:g} N" for g in groups[1:])
     fig.suptitle(f"Stability map, reference rod, {summary['model']} model (n = {summary['n']}, "
-                 f"dt = {summary['dt']:.2e} s, horizon {summary['t1']:g} s)",
+                 f"{steps}, horizon {summary['t1']:g} s)",
                  fontsize=11)  # pragma: no mutate
     fig.tight_layout()
     if path is not None:

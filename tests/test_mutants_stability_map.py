@@ -351,3 +351,57 @@ def test_a_map_runs_to_its_models_search_horizon_unless_given_one(monkeypatch):
         with pytest.raises(Stop):
             sm.stability_map((0.3,), model=model, out=None, progress=False, t1=t1)
     assert seen == [("field", 2.0), ("rod3d", 0.4), ("rod3d", 1.0)]
+
+
+def test_rod3d_map_runs_the_columns_past_the_wrinkling_load_with_the_explicit_scheme(monkeypatch, tmp_path):
+    """A 3D map whose loads straddle the wall's wrinkling load (F⁰₆ + 48.7 N for the reference
+    rod) runs two sweeps at one size: the columns below with the implicit step, those past it
+    with the explicit leapfrog (their own folder), joined in grid order; a single-scheme map is
+    one sweep in its usual folder."""
+    from jaxrod import stability_map as sm
+    from jaxrod.sweeps import SweepResult
+
+    calls = []
+
+    def fake_sweep(spec, grid, path=None, **kw):
+        dF, v0 = np.asarray(grid["dF"]), np.asarray(grid["amplitude"])
+        calls.append((spec.n, dF.tolist(), path))
+        k = len(dF) * len(v0)
+        scheme = "leapfrog" if dF[0] > 49 else "implicit"
+        ins = {"dF": np.repeat(dF, len(v0)), "amplitude": np.tile(v0, len(dF)), "index": np.arange(k)}
+        outs = {"buckled": ins["dF"] > 45, "result": np.zeros(k, int)}
+        return SweepResult(ins, outs, (len(dF), len(v0)), ("dF", "amplitude"),
+                           {"n": spec.n, "dt": 5e-5 if scheme == "implicit" else 7e-7, "scheme": scheme})
+
+    monkeypatch.setattr(sm, "sweep", fake_sweep)
+    monkeypatch.setattr(sm, "_summarise", lambda res, dF, v0, mu: {})
+    out = str(tmp_path / "m")
+    dF, v0 = np.array([20.0, 40.0, 49.6, 64.0]), np.array([0.01, 0.1])
+    res = sm._map_sweep(0.3, dF, v0, "rod3d", None, 6, 0.4, out, False, None)
+    n = sm.model_class("rod3d").default_size(jr.RodChannel.reference(0.3), 1.3080612552531 + 64.0,
+                                             sm.make_perturbation("sine", 1.0, 6))
+    assert calls == [(n, [20.0, 40.0], out), (n, [49.6, 64.0], out + "_dF49.6")]
+    assert res.shape == (4, 2) and res.inputs["index"].tolist() == list(range(8))
+    assert res.grid("buckled")[:, 0].tolist() == [False, False, True, True]
+    assert res.inputs["dF"].tolist() == [20.0, 20.0, 40.0, 40.0, 49.6, 49.6, 64.0, 64.0]
+    assert [(g["dF_first"], g["dF_last"], g["scheme"]) for g in res.meta["schemes"]] == [
+        (20.0, 40.0, "implicit"), (49.6, 64.0, "leapfrog")]
+    calls.clear()
+    res = sm._map_sweep(0.3, dF[:2], v0, "rod3d", 30, 6, 0.4, out, False, None)
+    assert calls == [(30, [20.0, 40.0], out)] and len(res.meta["schemes"]) == 1
+
+
+def test_a_rod3d_sweep_past_the_wrinkling_load_runs_the_explicit_scheme_at_its_step():
+    """The sweep's scheme is resolved with its step, at its largest load: a 3D sweep reaching past
+    the wrinkling load runs the explicit leapfrog (at the explicit step), one below it the
+    implicit step at its own (before, such a sweep ran the implicit scheme at the explicit step)."""
+    from jaxrod.sweeps import SweepSpec
+    from jaxrod.sweeps.member import _static_resolution
+
+    spec = SweepSpec(model="rod3d", n=12, t1=0.04)
+    below = _static_resolution(spec, {"dF": np.array([5.0, 40.0])})
+    past = _static_resolution(spec, {"dF": np.array([5.0, 60.0])})
+    assert below[3] == "implicit" and past[3] == "leapfrog"
+    assert past[1] < below[1]
+    field = _static_resolution(SweepSpec(model="field", n=32, t1=0.04), {"dF": np.array([60.0])})
+    assert field[3] == "verlet"

@@ -32,7 +32,8 @@ def _cmd_map(args) -> int:
         _fail(str(err))
     if not main:
         return 0
-    print(f"n = {s['n']}, dt = {s['dt']:.3e} s; wrote {args.out}/map.png, map.csv, map.json")
+    steps = ", ".join(f"{g['scheme']} at {g['dt']:.3e} s for dF {g['dF_first']:g}-{g['dF_last']:g} N" for g in s["schemes"])
+    print(f"n = {s['n']}, {steps}; wrote {args.out}/map.png, map.csv, map.json")
     for key, m in s["maps"].items():
         line = f"  mu = {key}: {m['buckled']} buckled, {m['stable']} stable"
         if m["failed"]:

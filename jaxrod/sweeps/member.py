@@ -64,11 +64,11 @@ def _member_inputs(spec: SweepSpec, p, index, base_key):
 N_SAVE = 201  # the stick test runs at every save, so a stuck member stops within t1/200
 
 
-def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
+def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float, scheme: str | None):
     """A member in three pure parts: `setup(params, index, base_key)` gives its model and its
     [`RunState`][jaxrod.integrators.base.RunState] at t = 0, the fixed-step engine advances it
-    (`advance`, `finished`), `outputs(ok, model, run)` summarises it. Every model, 3D included."""
-    scheme = _scheme(spec)
+    (`advance`, `finished`), `outputs(ok, model, run)` summarises it. Every model, 3D included;
+    every member runs `scheme` (the sweep's, `_static_resolution`)."""
 
     def integrator(model):  # the scene's scheme, as `Scene.integrator`
         return default_for(model, dt, scheme)
@@ -114,10 +114,10 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
     return setup, advance, finished, outputs
 
 
-def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
+def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float, scheme: str | None):
     """The pure per-member function `member(params, index, base_key) -> outputs` (one whole run:
     the "chunk" scheduling, and single runs)."""
-    setup, advance, finished, outputs = _engine_member(spec, n, dt, grid_dt)
+    setup, advance, finished, outputs = _engine_member(spec, n, dt, grid_dt, scheme)
 
     m, _ = save_grid(spec.t1, N_SAVE, dt)
 
@@ -130,7 +130,9 @@ def _make_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float):
 
 
 def _static_resolution(spec: SweepSpec, flat: dict[str, np.ndarray]):
-    """n and dt from the concrete inputs: the largest load sets n, the stiffest valid member dt.
+    """n, dt, the field grid's step and the scheme from the concrete inputs: the largest load sets n
+    and the scheme (the 3D rod's explicit leapfrog past the wall's wrinkling load, `Scene.scheme`),
+    the stiffest valid member dt, in that scheme; every member runs that scheme at that step.
     Depends only on the spec, the distinct stiffness values and the largest ΔF, and is cached
     on them (it evaluates the models eagerly: a few ms, much of a small sweep)."""
     stiff = [f for f in _STIFFNESS_FIELDS if f in flat]
@@ -171,9 +173,11 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
     scenes = [Scene(r, jnp_.asarray(dF_max), pert, kind=spec.model, n=n, mode=spec.mode) for r in rods]
     if spec.dt is not None:
         _check_given_step(spec, scenes)
-    dt = spec.dt or min(s.step() for s in scenes)
+    steps = [s.step() for s in scenes]
+    scheme = scenes[int(np.argmin(steps))].scheme() or cls.scheme  # the stiffest member's at the largest load
+    dt = spec.dt or min(steps)
     grid_dt = min(Scene(r, jnp_.asarray(dF_max), kind="field", n=128).step() for r in rods)
-    return n, float(dt), float(grid_dt)
+    return n, float(dt), float(grid_dt), scheme
 
 
 def _check_given_step(spec: SweepSpec, scenes) -> None:
@@ -190,7 +194,4 @@ def _perturbation(spec: SweepSpec):
     return make_perturbation(spec.perturbation, 1.0, spec.mode, None, spec.duration)
 
 
-def _scheme(spec: SweepSpec) -> str | None:
-    """The scheme of the sweep's members (the model's `scheme_under` its perturbation)."""
-    return model_class(spec.model).scheme_under(_perturbation(spec))
 

@@ -142,7 +142,7 @@ def sweep(
     members = range(total) if members is None else members
     if members.start < 0 or members.stop > total or members.step != 1:
         raise ValueError(f"members = {members!r} is invalid: expected a contiguous range within [0, {total}).")
-    n, dt, grid_dt = _static_resolution(spec, flat)
+    n, dt, grid_dt, scheme = _static_resolution(spec, flat)
     n_dev = jax.local_device_count()
     n_proc = jax.process_count()
     if chunk_size is None:
@@ -169,6 +169,7 @@ def sweep(
         "seed": seed,
         "n": n,
         "dt": dt,
+        "scheme": scheme,
         "dtype": dtype,
         "members": [members.start, members.stop],
         "chunk_size": chunk_size,
@@ -206,9 +207,9 @@ def sweep(
 
     spec_json = json.dumps(spec.to_json(), sort_keys=True)
     if scheduling == "pool":
-        run_chunk = _pool_runner(spec_json, n, dt, grid_dt, lanes, refill_every)
+        run_chunk = _pool_runner(spec_json, n, dt, grid_dt, scheme, lanes, refill_every)
     else:
-        run_chunk = _chunk_runner(spec_json, n, dt, grid_dt)
+        run_chunk = _chunk_runner(spec_json, n, dt, grid_dt, scheme)
     base_key = jax.random.key(seed)
     mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()), ("batch",))
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("batch"))
@@ -278,11 +279,11 @@ def sweep(
 
 
 @functools.lru_cache(maxsize=16)
-def _chunk_runner(spec_json: str, n, dt, grid_dt):
+def _chunk_runner(spec_json: str, n, dt, grid_dt, scheme):
     """One jitted chunk function per (spec, resolution): repeated sweeps reuse its compilation
     (the seed and all swept values are arguments, not constants)."""
     d = json.loads(spec_json)
-    member = _make_member(SweepSpec(**d), n, dt, grid_dt)
+    member = _make_member(SweepSpec(**d), n, dt, grid_dt, scheme)
 
     @jax.jit
     def run_chunk(params, idx, valid, base_key):
@@ -292,11 +293,11 @@ def _chunk_runner(spec_json: str, n, dt, grid_dt):
 
 
 @functools.lru_cache(maxsize=16)
-def _pool_runner(spec_json: str, n, dt, grid_dt, lanes: int, refill_every: int):
+def _pool_runner(spec_json: str, n, dt, grid_dt, scheme, lanes: int, refill_every: int):
     """One jitted chunk function with continuous batching: every device sets up its share of
     the chunk's members, runs them in `lanes` lanes ([`jaxrod.batching.run_pool`][]) and
     summarises them. Also returns the lane steps computed per device (for the utilisation)."""
-    setup, advance, finished, outputs = _engine_member(SweepSpec(**json.loads(spec_json)), n, dt, grid_dt)
+    setup, advance, finished, outputs = _engine_member(SweepSpec(**json.loads(spec_json)), n, dt, grid_dt, scheme)
     mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()), ("batch",))
     P = jax.sharding.PartitionSpec
 
