@@ -91,13 +91,48 @@ def _check_simulate(args) -> None:
                 _fail(f"argument {option}: only with --model rod3d (got --model {args.model}).")
 
 
+_TUBING_ARGS = {"E": "--E", "outer_diameter": "--od", "inner_diameter": "--id", "density": "--density",
+                "weight_per_length": "--weight", "clearance": "--clearance", "length": "--length", "nu": "--nu",
+                "mu": "--mu"}
+
+
 def _check_lockup(args) -> None:
-    for option, value, unit in (("--mu-L", args.mu_L, ""), ("--r-over-ell", args.r_over_ell, ""), ("--mu", args.mu, ""),
-                                ("--speed", args.speed, "m/s"), ("--push", args.push, "m")):
+    """Checks the case, or builds the tubing's rod (`args.tubing_rod`) from the SI options, each
+    error naming its option."""
+    given = {name: getattr(args, name) for name in ("E", "od", "id", "density", "weight", "clearance", "length", "nu")}
+    args.tubing_rod = None
+    if any(v is not None for v in given.values()):
+        if args.mu_L is not None or args.r_over_ell is not None:
+            _fail("arguments --mu-L/--r-over-ell and a tubing (--E, --od, ...) describe the case twice: give one.")
+        missing = [f"--{k}" for k in ("E", "od", "clearance", "length") if given[k] is None]
+        if given["density"] is None and given["weight"] is None:
+            missing.append("--density or --weight")
+        if missing:
+            _fail(f"a tubing in SI units needs {', '.join(missing)} as well.")
+        from ..lockup.si import tubing
+
+        try:
+            args.tubing_rod = tubing(args.E, args.od, args.clearance, args.length, args.mu,
+                                     inner_diameter=args.id or 0.0, density=args.density,
+                                     weight_per_length=args.weight, nu=0.3 if args.nu is None else args.nu)
+        except ValueError as err:
+            name, _, rest = str(err).partition(" = ")
+            _fail(f"argument {_TUBING_ARGS.get(name, name)}: {rest}" if name in _TUBING_ARGS else str(err))
+    else:
+        args.mu_L = 1.0 if args.mu_L is None else args.mu_L
+        args.r_over_ell = 0.02 if args.r_over_ell is None else args.r_over_ell
+        for option, value in (("--mu-L", args.mu_L), ("--r-over-ell", args.r_over_ell)):
+            _positive(option, value, "")
+        if args.r_over_ell >= 0.5:
+            _fail(f"argument --r-over-ell: {args.r_over_ell!r} is invalid: expected < 0.5 (a slender helix).")
+    for option, value, unit in (("--mu", args.mu, ""), ("--speed", args.speed, "m/s"), ("--push", args.push, "m")):
         _positive(option, value, unit)
-    if args.r_over_ell >= 0.5:
-        _fail(f"argument --r-over-ell: {args.r_over_ell!r} is invalid: expected < 0.5 (a slender helix).")
-    if args.far_load < 0:
+    if args.far_load is not None and args.far_force is not None:
+        _fail("arguments --far-load and --far-force give the far load twice: give one.")
+    if args.far_force is not None and args.far_force < 0:
+        _fail(f"argument --far-force: {args.far_force!r} is invalid: expected >= 0 N.")
+    args.far_load = 2.5 if (args.far_load is None and args.far_force is None) else args.far_load
+    if args.far_load is not None and args.far_load < 0:
         _fail(f"argument --far-load: {args.far_load!r} is invalid: expected >= 0 (in units of F0).")
     if args.damping < 0:
         _fail(f"argument --damping: {args.damping!r} is invalid: expected >= 0 1/s.")

@@ -19,12 +19,16 @@ def _cmd_lockup(args) -> int:
     from ..lockup import chain
     from ..lockup.closed_forms import HELICAL_LAWS, HELICAL_ONSETS
     from ..lockup.push import inject, push_rod, units
+    from ..lockup.si import case
     from ..lockup.verdict import turn_resolution, verdict
     from ..output import write_csv
 
-    # the values were checked by cli._checks (before any work)
-    rod = push_rod(args.mu_L, args.r_over_ell, args.mu)
+    # the values were checked by cli._checks (before any work), which also built the tubing's rod
+    rod = args.tubing_rod if args.tubing_rod is not None else push_rod(args.mu_L, args.r_over_ell, args.mu)
     F0, ell = units(rod)
+    args.mu_L, args.r_over_ell = case(rod)["mu_L_over_ell"], case(rod)["r_over_ell"]
+    if args.far_force is not None:
+        args.far_load = args.far_force / F0
     w = float(rod.rho * rod.g)
     duration = args.push / args.speed
     if not args.quiet:
@@ -58,6 +62,7 @@ def _cmd_lockup(args) -> int:
         "sinusoidal_over_ell_end": float(r["sinusoidal"][loading][-1] / ell),
         "drag_over_F0": args.damping * float(rod.rho) * float(rod.L) * args.speed / F0,
         "soft_string_entry_force_over_F0": soft,
+        "si": _in_si(rod, r, tail, loading, args.far_load * F0, F0, ell, soft),
         "verdict": {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in told.items()},
         "result": RESULTS.describe(r["result"]),
     }
@@ -82,9 +87,37 @@ def _cmd_lockup(args) -> int:
             print(f"  pulled back: entry force over the last fifth {u['entry_force_over_F0_last_fifth'][0]:.3f}-"
                   f"{u['entry_force_over_F0_last_fifth'][1]:.3f} F0; at the end helical {u['helical_over_ell_end']:.2f} ell, "
                   f"sinusoidal {u['sinusoidal_over_ell_end']:.2f} ell, far end moved {1e3 * u['far_end_moved_m']:.1f} mm")
+        si = summary["si"]
+        print(f"  in SI: F0 = {F0:.4g} N, ell = {ell:.4g} m, far load {si['far_force_N']:.4g} N, entry force over the "
+              f"last fifth {si['entry_force_N_last_fifth'][0]:.4g}-{si['entry_force_N_last_fifth'][1]:.4g} N, helical "
+              f"{si['helical_m_end']:.3g} m; soft-string lock-up length {si['soft_string_lockup_length_m']:.4g} m")
         print(f"  verdict (jaxrod.lockup.verdict): {told['status']}: {told['reason']}")
         print(f"  result: {summary['result']}; wrote {args.out}/lockup.csv, lockup.json, lockup.png")
     return 0 if r["result"] == 0 else 1
+
+
+TUBING_OPTIONS = (("--E", "Pa", "Young's modulus"), ("--od", "m", "outer diameter"),
+                  ("--id", "m", "inner diameter (default 0: a solid rod)"), ("--density", "kg/m^3", "density"),
+                  ("--weight", "N/m", "(buoyed) weight per length, with or instead of --density"),
+                  ("--clearance", "m", "radial clearance: channel radius minus outer radius"),
+                  ("--length", "m", "length"), ("--nu", "-", "Poisson's ratio (default 0.3)"))
+
+
+def _in_si(rod, r, tail, loading, F_far, F0, ell, soft) -> dict:
+    """The run's forces and lengths in N and m: F0, ell, the far load, the entry force over the last
+    fifth, the helical extent at the end of the push, the soft string's entry forces and its lock-up
+    length (default laws, unbounded push)."""
+    import numpy as np
+
+    from ..lockup import chain
+
+    F_in = np.asarray(r["F_in"])[tail]
+    EI, w = float(rod.EI), float(rod.rho * rod.g)
+    return {"F0_N": F0, "ell_m": ell, "L_m": float(rod.L), "clearance_m": float(rod.R), "EI_Nm2": EI, "w_N_per_m": w,
+            "far_force_N": F_far, "entry_force_N_last_fifth": [float(F_in.min()), float(F_in.max())],
+            "helical_m_end": float(r["helical"][loading][-1]),
+            "soft_string_entry_force_N": {k: v * F0 for k, v in soft.items()},
+            "soft_string_lockup_length_m": float(chain.lockup_length(EI, w, float(rod.R), float(rod.mu_d)))}
 
 
 def _unloading(r, ell) -> dict:
@@ -135,10 +168,15 @@ def register(sub) -> None:
     """`jaxrod lockup`: its arguments, checks and command."""
     lk = sub.add_parser("lockup", help="one rod injected into a long channel against a far-end load (the 3D rod; "
                         "docs/physics.md section 8)")
-    lk.add_argument("--mu-L", dest="mu_L", type=_finite_float, default=1.0, help="muL/ell (default 1)")
-    lk.add_argument("--r-over-ell", type=_finite_float, default=0.02, help="clearance r/ell (default 0.02)")
+    lk.add_argument("--mu-L", dest="mu_L", type=_finite_float, default=None,
+                    help="muL/ell of the case, on the reference rod's material (default 1)")
+    lk.add_argument("--r-over-ell", type=_finite_float, default=None, help="clearance r/ell (default 0.02)")
     lk.add_argument("--mu", type=_finite_float, default=0.5, help="friction coefficient (default 0.5)")
-    lk.add_argument("--far-load", type=_finite_float, default=2.5, help="far-end load in units of F0 (default 2.5)")
+    lk.add_argument("--far-load", type=_finite_float, default=None, help="far-end load in units of F0 (default 2.5)")
+    lk.add_argument("--far-force", type=_finite_float, default=None, help="far-end load [N] (instead of --far-load)")
+    si = lk.add_argument_group("a tubing in SI units (instead of --mu-L and --r-over-ell; jaxrod.lockup.si)")
+    for flag, unit, what in TUBING_OPTIONS:
+        si.add_argument(flag, type=_finite_float, default=None, help=f"{what} [{unit}]")
     lk.add_argument("--speed", type=_finite_float, default=5e-3, help="injection speed [m/s] (default 5e-3)")
     lk.add_argument("--push", type=_finite_float, default=0.3, help="how far the entry is pushed [m] (default 0.3)")
     lk.add_argument("--damping", type=_finite_float, default=20.0,

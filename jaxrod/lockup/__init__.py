@@ -3,10 +3,13 @@
 [`jaxrod.lockup.closed_forms`][] holds the soft-string closed forms: the onset loads, the wall
 force per length of a straight, sinusoidal and helical section, the force that reaches the far
 end, its largest value against the length, and the lock-up length.
+[`jaxrod.lockup.si`][] makes the rod and channel of a real tubing given in SI units and
+gives its case (μL/ℓ, r/ℓ) and units (F₀, ℓ).
 """
 
 from . import chain as chain
 from . import closed_forms as closed_forms
+from . import si as si
 from . import verdict as verdict
 from .chain import (
     far_force as far_force,
@@ -65,8 +68,11 @@ from .closed_forms import (
 from .chain import (
     wall_force as wall_force,
 )
+from .si import case as case
+from .si import tubing as tubing
 
 __all__ = [
+    "case",
     "chain",
     "closed_forms",
     "far_force",
@@ -82,10 +88,12 @@ __all__ = [
     "length_unit",
     "lockup_length",
     "section_extents",
+    "si",
     "sinusoidal_onset",
     "sinusoidal_transfer",
     "straight_transfer",
     "transfer",
     "transfer_length",
+    "tubing",
     "wall_force",
 ]
