@@ -405,3 +405,25 @@ def test_a_rod3d_sweep_past_the_wrinkling_load_runs_the_explicit_scheme_at_its_s
     assert past[1] < below[1]
     field = _static_resolution(SweepSpec(model="field", n=32, t1=0.04), {"dF": np.array([60.0])})
     assert field[3] == "verlet"
+
+
+def test_the_map_command_reports_each_schemes_step_and_a_boundary_without_a_searched_curve(monkeypatch, capsys):
+    """`jaxrod map` prints each column group's scheme and step, the fitted boundary of a map that
+    has one even without a searched curve (the 3D rod's), and "no boundary crossing" only when no
+    column has one."""
+    from jaxrod import stability_map as sm
+    from jaxrod.cli import main
+
+    def fake(mus, dF, v0, model, n, mode, out, **kw):
+        m = dict(mu=0.3, buckled=3, stable=5, failed=0, exponent=-0.7, exponent_stderr=0.02, boundary_dF=[1.0, 2.0],
+                 largest_stable_dF_over_F0cr=1.5)
+        return dict(n=12, dt=5e-5, maps={"0.3": m, "0.2": dict(m, exponent=float("nan"), boundary_dF=[])},
+                    schemes=[dict(dF_first=1.0, dF_last=2.0, scheme="implicit", dt=5e-5),
+                             dict(dF_first=64.0, dF_last=64.0, scheme="leapfrog", dt=7.4e-7)])
+
+    monkeypatch.setattr(sm, "stability_map", fake)
+    assert main(["map", "--model", "rod3d", "--quiet", "--out", "/tmp/jaxrod-unused"]) == 0
+    out = capsys.readouterr().out
+    assert "n = 12, implicit at 5.000e-05 s for dF 1-2 N, leapfrog at 7.400e-07 s for dF 64-64 N" in out
+    assert "p = -0.700 +/- 0.020 (theory -1/2), from 2 columns" in out
+    assert out.count("no boundary crossing inside the grid") == 1

@@ -43,13 +43,13 @@ def _cmd_map(args) -> int:
             if math.isfinite(m["exponent"]):
                 print(f"    boundary v0 ~ dF^p with p = {m['exponent']:.3f} +/- {m['exponent_stderr']:.3f} "
                       f"(theory -1/2), from {len(m['boundary_dF'])} columns")
+            else:
+                print("    no boundary crossing inside the grid: widen --v0 or --dF")
             if "curve_v0" in m:
                 found = sum(x is not None for x in m["curve_v0"])
                 print(f"    searched boundary at {found} of {len(m['curve_v0'])} loads (rtol {m['curve_rtol']:g}, "
                       f"{sum(m['curve_evaluations'])} runs): p = {m['curve_exponent']:.3f} +/- "
                       f"{m['curve_exponent_stderr']:.3f}")
-            else:
-                print("    no boundary crossing inside the grid: widen --v0 or --dF")
         largest = m["largest_stable_dF_over_F0cr"]
         print("    largest stable dF/F0cr seen: " + (f"{largest:.2f}" if largest is not None else "none (buckles everywhere)"))
     return 0
