@@ -40,6 +40,7 @@ CASES = [
     (["lockup", "--E", "2e11", "--od", "0.05", "--clearance", "0.02", "--length", "100", "--weight", "0"], "--weight"),
     (["lockup", "--E", "2e11", "--od", "0.05", "--clearance", "0.02", "--length", "100", "--density", "7850", "--mu-L", "1"], "--mu-L"),
     (["lockup", "--far-force", "-1"], "--far-force"),
+    (["critical-load", "--t1", "0"], "--t1"),
     (["lockup", "--far-force", "1", "--far-load", "1"], "--far-force"),
     (["lockup", "--speed", "0"], "--speed"),
     (["lockup", "--damping", "-2"], "--damping"),

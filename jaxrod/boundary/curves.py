@@ -150,15 +150,15 @@ def _bisect_near(rod, dF, guess, lo, hi, *, model, mode, n, dt, rtol, max_iter, 
     return _named(res), sens
 
 
-def _on_devices(fn, devices):
-    """`fn(rod, dFs, guesses)` over a batch of loads, one load per device (`shard_map` over the
-    local devices: each device runs its own search, with no step in lockstep with the others),
-    jitted once."""
+def _on_devices(fn, devices, batched: int = 2):
+    """`fn(shared, *batch)` over a batch of points (the last `batched` arguments; e.g. loads and
+    guesses), one point per device (`shard_map` over the local devices: each device runs its own
+    search, with no step in lockstep with the others), jitted once."""
     from jax.sharding import Mesh, PartitionSpec as P
 
     mesh = Mesh(np.asarray(devices), ("batch",))
-    local = lambda rod, dF, g: jax.vmap(fn, (None, 0, 0))(rod, dF, g)
-    return jax.jit(jax.shard_map(local, mesh=mesh, in_specs=(P(), P("batch"), P("batch")), out_specs=P("batch"),
+    local = lambda shared, *b: jax.vmap(fn, (None,) + (0,) * batched)(shared, *b)
+    return jax.jit(jax.shard_map(local, mesh=mesh, in_specs=(P(),) + (P("batch"),) * batched, out_specs=P("batch"),
                                  check_vma=False))
 
 
@@ -201,9 +201,17 @@ def _seeded_bisection(rod, dFs, bracket, width, n, dt, progress, *, model, mode,
 
 def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, seed=0, model="field",
                         n=None, dt=None, mode=6, bracket=(1e-2, 100.0), rtol=1e-6, max_iter=60, t1=2.0,
-                        method=None, rod_overrides=None, sensitivities=("mu", "amplitude")):
+                        method=None, rod_overrides=None, sensitivities=("mu", "amplitude"), seeded=True,
+                        width=0.2, progress=False):
     """ΔF*(μ) for an array of friction coefficients and `realizations` random perturbations
     each (keys `fold_in(key(seed), i·realizations + r)`), vmapped.
+
+    With `seeded` and label bisection on a model other than the field model (the 3D rod's
+    default), each point is predicted by the field model's ΔF* (same perturbation, key and
+    horizon; to 1e-4) and bisected from ±`width` around it, moved and widened while its ends agree
+    ([`jaxrod.boundary.expanding_bisection`][], inside `bracket`), the points on the local devices
+    at once, one per device (the E4 driver's search: a bracket around the field model's root,
+    `jaxrod.experiments.e4.rod3d`); otherwise one vmapped, jitted search over `bracket` each.
 
     **Returns:** `(RootResult, sensitivities)` with batch axes (len(mus), realizations).
     """
@@ -212,6 +220,10 @@ def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, 
 
     mus = np.asarray(mus, float)
     overrides = dict(rod_overrides or {})
+    if seeded and _method_of(method, model, perturbation) == "bisection" and model != "field":
+        return _seeded_critical_load(mus, amplitude, bracket, width, n, dt, progress, perturbation=perturbation,
+                                     realizations=realizations, seed=seed, model=model, mode=mode, rtol=rtol,
+                                     max_iter=max_iter, t1=t1, overrides=overrides, sensitivities=sensitivities)
     base = RodChannel.reference(mu=float(mus.max()), **overrides)
     if _method_of(method, model, perturbation) != "exact":
         probe = Scene(base, float(bracket[1]), make_perturbation(perturbation, 1.0, mode), kind=model, n=n,
@@ -231,3 +243,53 @@ def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, 
     reals = jnp.arange(realizations)
     run = jax.vmap(jax.vmap(one, (None, 0, None)), (0, None, 0))
     return jax.jit(run)(jnp.asarray(mus), reals, idx)
+
+
+def _seeded_critical_load(mus, amplitude, bracket, width, n, dt, progress, *, perturbation, realizations, seed, model,
+                          mode, rtol, max_iter, t1, overrides, sensitivities):
+    """`critical_load_curve` by label bisection around the field model's ΔF* (its docstring), one
+    point per local device, one compiled search at the resolution and scheme of the largest first
+    bracket's top."""
+    from ..params import RodChannel
+
+    guess, _ = critical_load_curve(mus, amplitude, perturbation=perturbation, realizations=realizations, seed=seed,
+                                   model="field", mode=mode, bracket=bracket, rtol=1e-4, t1=t1,
+                                   rod_overrides=overrides, sensitivities=())
+    guess = np.asarray(guess.root, float).reshape(-1)
+    guess = np.where(np.isfinite(guess), guess, math.sqrt(bracket[0] * bracket[1]))
+    mu_of = np.repeat(mus, realizations)
+    index = np.arange(len(mu_of))  # i·realizations + r, as the vmapped curve's keys
+    top = min(float(np.max(guess)) * (1 + width), float(bracket[1]))
+    base = RodChannel.reference(mu=float(mus.max()), **overrides)
+    probe = Scene(base, top, make_perturbation(perturbation, 1.0, mode), kind=model, n=n, mode=mode, dt=dt)
+    n_, dt_, scheme = probe.size(), probe.step(), probe.scheme()
+    dtype = jnp.result_type(float)
+    lo, hi = (jnp.asarray(b, dtype) for b in bracket)
+    root_key = jax.random.key(seed)
+
+    def one(amp, mu, i, g):
+        params = _params_of(RodChannel.reference(mu=mu, **overrides), amplitude=amp)
+        key = jax.random.fold_in(root_key, i)
+        scene_of2 = lambda dF, p: _scene(_rod_of(RodChannel, p), dF, p["amplitude"], model, n_, mode, dt_,
+                                         perturbation, key, scheme)
+        res = expanding_bisection(_label(lambda dF: scene_of2(dF, params), t1), g, width, rtol, max_iter,
+                                  floor=lo, ceiling=hi)
+        sub = {k: params[k] for k in sensitivities}
+        sens = departure_sensitivities(lambda x, s: scene_of2(x, {**params, **s}), res.hi, sub, t1) if sub else {}
+        return _named(res), sens
+
+    devices = jax.local_devices()[:len(index)]
+    run = _on_devices(one, devices, batched=3)
+    out = [None] * len(index)
+    bar = _progress(len(index), progress)
+    for start in range(0, len(index), len(devices)):
+        chunk = index[np.arange(start, start + len(devices)).clip(max=len(index) - 1)]  # the last chunk padded
+        res = run(jnp.asarray(amplitude, dtype), jnp.asarray(mu_of[chunk], dtype), jnp.asarray(chunk),
+                  jnp.asarray(guess[chunk], dtype))
+        k = min(len(devices), len(index) - start)
+        for j in range(k):
+            out[chunk[j]] = jax.tree_util.tree_map(lambda a: np.asarray(a)[j], res)
+        bar.update(k)
+    bar.close()
+    shape = (len(mus), realizations)
+    return jax.tree_util.tree_map(lambda *a: jnp.asarray(np.stack(a).reshape(shape + np.shape(a[0]))), *out)

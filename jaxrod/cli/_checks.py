@@ -66,6 +66,7 @@ def _check_critical_load(args) -> None:
     if np.any(args.mu <= 0):
         _fail("argument --mu: friction coefficients must be > 0 (no frictional boundary at mu = 0).")
     _positive("--amplitude", args.amplitude, "(m/s, N/m or m)")
+    _positive("--t1", args.t1, "s")
     if args.max_dF <= MIN_DF_BRACKET:
         _fail(f"argument --max-dF: {args.max_dF!r} is invalid: the bracket's top must be > its "
               f"bottom, {MIN_DF_BRACKET:g} N.")

@@ -78,8 +78,9 @@ def _cmd_critical_load(args) -> int:
     R = args.realizations  # --mu, --amplitude, --max-dF, --n and --method were checked by cli._checks
     try:
         res, _ = bd.critical_load_curve(args.mu, args.amplitude, perturbation=args.perturbation, realizations=R,
-                                        seed=args.seed, model=args.model, n=args.n, rtol=args.rtol,
-                                        bracket=(MIN_DF_BRACKET, args.max_dF), method=args.method)
+                                        seed=args.seed, model=args.model, n=args.n, rtol=args.rtol, t1=args.t1,
+                                        bracket=(MIN_DF_BRACKET, args.max_dF), method=args.method, sensitivities=(),
+                                        progress=not args.json)
     except ValueError as err:
         _fail(str(err))
     F = np.asarray(res.root)
@@ -152,6 +153,7 @@ def register_critical_load(sub) -> None:
     cl.add_argument("--n", type=_positive_int, default=None)
     cl.add_argument("--max-dF", dest="max_dF", type=_finite_float, default=100.0, help="bracket top [N]")
     cl.add_argument("--rtol", type=_rtol, default=1e-6, help="relative tolerance in (0, 0.5) (default 1e-6)")
+    cl.add_argument("--t1", type=_finite_float, default=2.0, help="horizon of a run [s] (default 2; E4's 3D runs 0.5)")
     cl.add_argument("--out", default=None)
     cl.add_argument("--method", choices=["departure", "bisection"], default=None,
                     help="rod models: departure-rate secant (default) or label bisection (default for rod3d)")
