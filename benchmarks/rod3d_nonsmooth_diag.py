@@ -6,6 +6,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py e4 --scheme local --dt 2e-5 1e-5     # E4 C, mu 0.05 (~3-5 min a step)
     python benchmarks/rod3d_nonsmooth_diag.py e4 --scheme coupled --dt 5e-5        # (~7 min)
     python benchmarks/rod3d_nonsmooth_diag.py e4-forcing --mu 0.05                 # its forcing phase explicit
+    python benchmarks/rod3d_nonsmooth_diag.py e4-warmup --tau 0.02 0.1             # and its first tau s
     python benchmarks/rod3d_nonsmooth_diag.py wrinkle                              # the 61 N rod, seeded (~2 min)
     python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
     python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
@@ -93,6 +94,38 @@ def e4_forcing(args):
                               wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
 
+def e4_warmup(args):
+    """E4 C with the implicit scheme forced (local pass, 5e-5 s) after the forcing phase and a
+    first stretch of `tau` [s] of free motion both integrated by the explicit leapfrog at half its
+    limit: whether small steps at the start alone (what an error-controlled step would take while
+    the released segment-scale modes ring) bring ΔF* to the explicit value."""
+    from jaxrod import perturbations
+    from jaxrod.experiments.e4.rod3d import e4_point
+    from jaxrod.rod3d import step_limit
+
+    SCHEMES["implicit"] = _scheme(args.scheme)
+    perturbations.RandomForce.implicit_3d = True
+    run_phase = perturbations.RandomForce.initial_state
+    rod = jr.RodChannel.reference(0.3)
+    h_explicit = 0.5 * float(step_limit(Rod3D(rod, 500, control="load", end_load=float(theory.reference_load(rod)) + 10.0)))
+    opts = jr.RunOptions(stop_on_buckle=False, stop_when_stuck=False, early_exit=False, save_state=False)
+    for tau in args.tau:
+        def warm(self, model, integrator=None, tau=tau):
+            if not isinstance(integrator, ImplicitLeapfrog):
+                return run_phase(self, model, integrator)
+            explicit = jr.ProjectedLeapfrog(h_explicit)
+            q, v = run_phase(self, model, explicit)
+            sol = explicit.integrate(model, q, v, tau, 2, opts, check_step_limit=False)
+            return sol.q_final, sol.v_final
+
+        perturbations.RandomForce.initial_state = warm
+        t = time.perf_counter()
+        row = e4_point("C", args.mu, 0, 500, t1=0.5, width=1.5)
+        print(json.dumps(dict(what=f"E4 C mu {args.mu:g} dF* [N], forcing and the first tau explicit", scheme=args.scheme,
+                              dt=5e-5, tau=tau, h_explicit=h_explicit, lo=row["lo"], hi=row["hi"], result=row["result"],
+                              runs=row["runs"], wall_s=round(time.perf_counter() - t, 1))), flush=True)
+
+
 def wrinkle(args):
     rod = jr.RodChannel.reference(0.3)
     F = float(theory.reference_load(rod)) + 60.0
@@ -168,6 +201,10 @@ def main():
     p = sub.add_parser("e4-forcing")
     p.add_argument("--scheme", choices=["local", "coupled"], default="local")
     p.add_argument("--mu", type=float, nargs="+", default=[0.05])
+    p = sub.add_parser("e4-warmup")
+    p.add_argument("--scheme", choices=["local", "coupled"], default="local")
+    p.add_argument("--mu", type=float, default=0.05)
+    p.add_argument("--tau", type=float, nargs="+", default=[0.02, 0.1])
     sub.add_parser("wrinkle")
     p = sub.add_parser("vstar")
     p.add_argument("--scheme", choices=["local", "coupled"], default="coupled")
@@ -178,7 +215,7 @@ def main():
     p.add_argument("--n", type=int, default=500)
     p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
     args = ap.parse_args()
-    {"e4": e4, "e4-forcing": e4_forcing, "wrinkle": wrinkle, "vstar": vstar, "modes": modes}[args.cmd](args)
+    {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes}[args.cmd](args)
 
 
 if __name__ == "__main__":
