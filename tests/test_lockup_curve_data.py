@@ -27,15 +27,15 @@ def _rows(name):
 
 def test_every_bracket_rests_on_steady_stages_on_either_side_of_the_bound():
     stages = _rows("stages.csv")
-    for row in _rows("curve.csv") + _rows("lockup_length_at_fc.csv"):
-        if row["status"] != "bracketed":
+    for row in _rows("curve.csv"):
+        if row["status"] != "bracketed" or row["kind"] != "run":
             continue
-        lo, hi = (float(row[k]) for k in (("F_far_max_lo", "F_far_max_hi") if "F_far_max_lo" in row
-                                          else ("muL_lock_lo", "muL_lock_hi")))
+        lo, hi = float(row["lo"]), float(row["hi"])
         assert 0 < hi - lo <= 0.03 * hi, row
+        far = row["quantity"] == "F_far_max"
         mine = [s for s in stages if s["n_segments"] == row["n_segments"] and s["push_speed"] == row["push_speed"]
-                and s["varies"] == ("far_load" if "F_far_max_lo" in row else "mu")
-                and ("F_far_max_lo" not in row or s["muL_over_ell"] == row["muL_over_ell"])]
+                and s["varies"] == ("far_load" if far else "mu")
+                and (not far or s["muL_over_ell"] == row["muL_over_ell"])]
         f_c = float(row["entry_force_bound"])
         below = [s for s in mine if math.isclose(float(s["parameter"]), lo) and s["status"] == "sliding"]
         above = [s for s in mine if math.isclose(float(s["parameter"]), hi)]
@@ -46,6 +46,8 @@ def test_every_bracket_rests_on_steady_stages_on_either_side_of_the_bound():
 def test_the_soft_string_columns_are_the_chain_at_the_bound():
     summary = json.loads((DATA / "curve.json").read_text())
     for row in _rows("curve.csv"):
+        if row["quantity"] != "F_far_max":
+            continue
         rod = push_rod(float(row["L_over_ell"]), summary["r_over_ell"], 1.0)
         F0, ell = units(rod)
         X, f_c = float(row["muL_over_ell"]), float(row["entry_force_bound"])
@@ -59,8 +61,9 @@ def test_the_soft_string_columns_are_the_chain_at_the_bound():
 
 def test_the_readme_quotes_the_files():
     readme = (ROOT / "README.md").read_text()
-    base = [r for r in _rows("lockup_length_at_fc.csv") if r["segments_per_wave"] == "16" and r["push_speed"] == "0.01"]
-    lo, hi = float(base[0]["muL_lock_lo"]), float(base[0]["muL_lock_hi"])
+    base = [r for r in _rows("curve.csv") if r["quantity"] == "muL_lock" and r["segments_per_wave"] == "16"
+            and r["push_speed"] == "0.01"]
+    lo, hi = float(base[0]["lo"]), float(base[0]["hi"])
     assert f"{lo:.3f}–{hi:.3f}" in readme
     summary = json.loads((DATA / "curve.json").read_text())
     assert f"{summary['wall_s_this_call'] / 60:.1f} min" in readme

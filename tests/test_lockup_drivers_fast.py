@@ -86,175 +86,63 @@ def test_the_closed_forms_beside_a_lane_are_the_soft_strings_in_units_of_F0_and_
 
 
 def test_the_jobs_are_each_group_at_the_base_run_and_its_converge_lanes_at_the_others():
+    """The full setting runs every lane at the base (16 segments per wave, 10 mm/s), twice the
+    segments, half and a quarter of the speed (the quasi-static limit and the segment convergence
+    at every point, issue [lockup-converged]); μL/ℓ = 4 (past the bound's lock-up) only at the base."""
     jobs = list(lx._jobs(lx.SETTINGS[False], "out"))
-    p = lambda name: os.path.join("out", "jobs", name)  # noqa: E731
-    assert jobs == [
-        ((2.0, (0.5, 1.0, 1.5, 2.0), None), (16, 10e-3), p("L2_w16_v10.json")),
-        ((2.0, (1.0, 2.0), None), (32, 10e-3), p("L2_w32_v10.json")),
-        ((2.0, (1.0, 2.0), None), (16, 5e-3), p("L2_w16_v5.json")),
-        ((4.0, (3.0, 4.0), "auto"), (16, 10e-3), p("L4_w16_v10.json")),
-        ((4.0, (), "auto"), (32, 10e-3), p("L4_w32_v10.json")),
-        ((4.0, (), "auto"), (16, 5e-3), p("L4_w16_v5.json")),
-    ]
+    runs = [(16, 10e-3), (32, 10e-3), (16, 5e-3), (16, 2.5e-3)]
+    assert jobs == ([((2.0, (0.5, 1.0, 1.5, 2.0), None), run) for run in runs]
+                    + [((4.0, (3.0, 4.0), "auto"), runs[0])] + [((4.0, (3.0,), "auto"), run) for run in runs[1:]])
     # without "lock" in converge a group with no converge lane is not run again; without converge
     # every lane runs at every setting
     S = dict(groups=((1.5, (0.5,), 0.7), (3.0, (2.0,), None)), runs=((8, 0.02), (12, 0.02)), converge=(2.0,))
-    assert [(g, run) for g, run, _ in lx._jobs(S, "o")] == [
+    assert list(lx._jobs(S, "o")) == [
         ((1.5, (0.5,), 0.7), (8, 0.02)), ((3.0, (2.0,), None), (8, 0.02)), ((3.0, (2.0,), None), (12, 0.02))]
     S.pop("converge")
-    assert [(g, run) for g, run, _ in lx._jobs(S, "o")] == [
+    assert list(lx._jobs(S, "o")) == [
         ((1.5, (0.5,), 0.7), (8, 0.02)), ((1.5, (0.5,), 0.7), (12, 0.02)), ((3.0, (2.0,), None), (8, 0.02)),
         ((3.0, (2.0,), None), (12, 0.02))]
 
 
-def _stage(stage, parameter, status, f_in, sinusoidal=0.0, helical=0.0, per_turn=50.0, angle=1.0):
-    return dict(stage=stage, parameter=parameter, status=status, f_in=f_in, segments_per_turn=per_turn,
-                helix_angle=angle, helical=helical, sinusoidal=sinusoidal, reason="hand-made")
+def _run_row(X, w, v, lo, hi, quantity="F_far_max", status="bracketed"):
+    return dict(quantity=quantity, muL_over_ell=X, n_segments=2 * w, push_speed=v, protocol="staircase", kind="run",
+                lo=lo, hi=hi, status=status, segments_per_wave=w)
 
 
-def test_the_onsets_bracket_the_steady_stages_per_setting():
-    """Only sliding stages count; per (segments per wave, speed), in order of segments then falling
-    speed: the sinusoidal onset lies between the largest force without a buckle (sinusoidal +
-    helical extent 0) and the smallest with one, the helical onset likewise on the helical extent;
-    a force without one above the smallest with one is counted as inconsistent."""
-    lane_a = dict(stages=[_stage(0, 1.0, SLIDING, 1.8), _stage(1, 1.1, SLIDING, 2.3, sinusoidal=0.5),
-                          _stage(2, 1.2, SLIDING, 3.1, sinusoidal=0.2, helical=0.4),
-                          _stage(3, 1.3, "transient", 1.0, sinusoidal=0.3, helical=0.3)])
-    lane_b = dict(stages=[_stage(0, 0.5, SLIDING, 2.6), _stage(1, 0.6, SLIDING, 2.9, helical=0.2),
-                          _stage(2, 0.7, SLIDING, 2.3)])  # at the smallest buckled force, not above it
-    slow = dict(stages=[_stage(0, 1.0, SLIDING, 2.05, sinusoidal=0.1), _stage(1, 1.1, "locked", 9.0)])
-    coarse = dict(stages=[_stage(0, 1.0, "transient", 2.5, helical=1.0)])
-    results = [dict(per_wave=16, speed=0.005, lanes=[slow]), dict(per_wave=32, speed=0.01, lanes=[coarse]),
-               dict(per_wave=16, speed=0.01, lanes=[lane_a]), dict(per_wave=16, speed=0.01, lanes=[lane_b])]
-    rows = lx._onsets(results)
-    assert [(r["segments_per_wave"], r["push_speed"]) for r in rows] == [(16, 0.01), (16, 0.005), (32, 0.01)]
-    fast, half, none = rows
-    assert fast == dict(segments_per_wave=16, push_speed=0.01, steady_stages=6,
-                        sinusoidal_onset_lo=2.6, sinusoidal_onset_hi=2.3, sinusoidal_inconsistent=1,
-                        helical_onset_lo=2.6, helical_onset_hi=2.9, helical_inconsistent=0)
-    assert half["steady_stages"] == 1 and half["sinusoidal_onset_hi"] == 2.05
-    assert math.isnan(half["sinusoidal_onset_lo"]) and half["helical_onset_lo"] == 2.05
-    assert math.isnan(half["helical_onset_hi"]) and half["helical_inconsistent"] == 0
-    assert none["steady_stages"] == 0
-    assert all(math.isnan(none[k]) for k in ("sinusoidal_onset_lo", "sinusoidal_onset_hi", "helical_onset_lo",
-                                             "helical_onset_hi"))
+def test_the_converged_value_is_the_quarter_speeds_or_extrapolated_to_zero_speed_with_its_error_bar():
+    """Midpoints 2.00 (v), 2.10 (v/2), 2.14 (v/4) and 2.035 at twice the segments, half-widths
+    0.01: v/4 is +1.9 % on v/2, not converged at 1 %: extrapolated linearly through v/2, v/4 to
+    2.18; the quadratic through all three gives (8·2.14 − 6·2.10 + 2)/3 = 2.1733…; bar =
+    |2.18 − 2.1733| + (2·0.01 + 0.01) + |2.035 − 2.00|. Segments +1.75 % (converged at 2 %), half
+    speed +5 %. At μL/ℓ = 2, v/4 +0.5 % on v/2: converged in speed, the value is v/4's 1.015, its
+    bar |1.015 − 1.01| + 0.01 + 0.025 (twice the segments 1.035 against 1.01: +2.5 %, not converged). A
+    point with a run unbracketed or missing gets no row; the lock-up length's point (μL/ℓ NaN)
+    is one point."""
+    S = dict(runs=((16, 0.01), (32, 0.01), (16, 0.005), (16, 0.0025)))
+    rows = [_run_row(1.0, 16, 0.01, 1.99, 2.01), _run_row(1.0, 32, 0.01, 2.025, 2.045),
+            _run_row(1.0, 16, 0.005, 2.09, 2.11), _run_row(1.0, 16, 0.0025, 2.13, 2.15),
+            _run_row(2.0, 16, 0.01, 1.0, 1.02), _run_row(2.0, 32, 0.01, 1.025, 1.045),
+            _run_row(2.0, 16, 0.005, 1.0, 1.02), _run_row(2.0, 16, 0.0025, 1.005, 1.025),
+            _run_row(3.0, 16, 0.01, 1.0, 1.02), _run_row(3.0, 32, 0.01, 1.0, 1.02),
+            _run_row(3.0, 16, 0.005, 1.0, 1.02), _run_row(3.0, 16, 0.0025, 1.0, math.nan, status="open")]
+    rows += [_run_row(math.nan, w, v, 2.9, 2.96, quantity="muL_lock") for w, v in S["runs"]]
+    one, two, lock = lx.converged(rows, S)
+    assert (one["quantity"], one["muL_over_ell"], one["kind"], one["push_speed"]) == ("F_far_max", 1.0, "converged", 0.0)
+    assert one["status"] == "extrapolated to v = 0" and one["quasi_static"] == pytest.approx(2.18, abs=1e-12)
+    assert one["error_bar"] == pytest.approx(abs(2.18 - (8 * 2.14 - 6 * 2.10 + 2.0) / 3) + 0.03 + 0.035, abs=1e-12)
+    assert (one["lo"], one["hi"]) == (pytest.approx(2.18 - one["error_bar"]), pytest.approx(2.18 + one["error_bar"]))
+    assert one["d_segments"] == pytest.approx(0.0175) and one["d_half_speed"] == pytest.approx(0.05)
+    assert one["d_quarter_speed"] == pytest.approx(2.14 / 2.10 - 1)
+    assert one["converged_segments"] and not one["converged_speed"]
+    assert two["status"] == "converged in speed" and two["quasi_static"] == pytest.approx(1.015)
+    assert two["error_bar"] == pytest.approx(0.005 + 0.01 + 0.025) and two["converged_speed"]
+    assert not two["converged_segments"]
+    assert lock["quantity"] == "muL_lock" and lock["quasi_static"] == pytest.approx(2.93)
+    assert lock["error_bar"] == pytest.approx(0.03) and lock["converged_segments"] and lock["converged_speed"]
+    assert lx.converged(rows, dict(runs=((16, 0.01), (32, 0.01), (16, 0.005)))) == []  # no quarter speed run
 
 
-def _hand_results(n=4):
-    """One job's JSON by hand on ROD: a far-load lane at X = 0.5 (three stages, the last transient;
-    one steady profile) and the lock-up lane (one transient stage, no profile)."""
-    l0 = float(ROD.L) / n
-    profile = dict(parameter=2.0, f_in=2.5, mu=0.5, theta=[0.0, 0.01, -0.02, 0.01, 0.0], wall_force=[0.3] * (n + 1),
-                   axial_force=[0.4, 0.45, 0.5, 0.55])
-    far = dict(status="bracketed", lo=2.0, hi=2.06, X=0.5, vary_mu=False, start=2.0, profiles=[profile],
-               stages=[_stage(0, 2.0, SLIDING, 2.5, per_turn=40.0, angle=1.0),
-                       _stage(1, 2.06, SLIDING, 2.7, sinusoidal=0.2, per_turn=20.0, angle=2.0),
-                       _stage(2, 2.1, "transient", 2.9, per_turn=5.0, angle=9.0)])
-    lock = dict(status="open", lo=0.5, hi=None, X=0.5, vary_mu=True, start=0.0, profiles=[],
-                stages=[_stage(0, 0.5, "transient", 0.6, per_turn=3.0, angle=20.0)])
-    return [dict(L_over_ell=1.0, per_wave=8, speed=0.01, n=n, dt=5e-5, f_c=1.5, F0=F0, ell=ELL, l0=l0,
-                 r=float(ROD.R), EI=float(ROD.EI), w=float(ROD.rho * ROD.g), mu_of_X=1.0, wall_s=3.5,
-                 lanes=[far, lock])]
-
-
-def test_the_files_carry_every_lane_stage_and_profile_with_the_soft_string_beside_them(tmp_path):
-    results = _hand_results()
-    S = dict(lx.SETTINGS["tiny"], f_c=1.5)
-    summary = lx._write(str(tmp_path), S, results, 7.0)
-    soft = _soft_by_hand(0.5, 1.5)
-    far_cols = [f"soft_{k}_at_fc" for k in VARIANTS] + [f"soft_{k}_unbounded" for k in VARIANTS]
-    curve = _rows(tmp_path / "curve.csv")
-    assert list(curve[0]) == ["muL_over_ell", "n_segments", "push_speed", "F_far_max_lo", "F_far_max_hi", "status",
-                              "entry_force_bound", "segments_per_wave", "L_over_ell", "stages",
-                              "segments_per_turn_sliding", "helix_angle_sliding_deg"] + far_cols
-    (row,) = curve
-    assert {k: row[k] for k in list(row)[:12]} == dict(
-        muL_over_ell="0.5", n_segments="4", push_speed="0.01", F_far_max_lo="2.0", F_far_max_hi="2.06",
-        status="bracketed", entry_force_bound="1.5", segments_per_wave="8", L_over_ell="1.0", stages="3",
-        segments_per_turn_sliding="20.0", helix_angle_sliding_deg="2.0")  # the worst over the sliding stages
-    for k in VARIANTS:
-        assert float(row[f"soft_{k}_at_fc"]) == pytest.approx(soft[k]["far_at_fc"], rel=1e-9)
-        assert float(row[f"soft_{k}_unbounded"]) == pytest.approx(soft[k]["far_max"], rel=1e-9)
-    (lock,) = _rows(tmp_path / "lockup_length_at_fc.csv")
-    assert list(lock)[:11] == ["n_segments", "push_speed", "status", "entry_force_bound", "segments_per_wave",
-                               "L_over_ell", "stages", "segments_per_turn_sliding", "helix_angle_sliding_deg",
-                               "muL_lock_lo", "muL_lock_hi"]
-    assert (lock["status"], lock["stages"], lock["muL_lock_lo"], lock["muL_lock_hi"]) == ("open", "1", "0.5", "nan")
-    assert (lock["n_segments"], lock["push_speed"], lock["segments_per_wave"], lock["L_over_ell"]) == (
-        "4", "0.01", "8", "1.0")
-    assert (lock["segments_per_turn_sliding"], lock["helix_angle_sliding_deg"]) == ("inf", "0.0")  # none slid
-    for k in VARIANTS:
-        assert float(lock[f"soft_{k}_at_fc"]) == pytest.approx(1.5, rel=1e-9)
-        assert float(lock[f"soft_{k}_unbounded"]) == pytest.approx(soft[k]["lock"], rel=1e-9)
-    stages = _rows(tmp_path / "stages.csv")
-    assert [(s["varies"], s["parameter"], s["status"]) for s in stages] == [
-        ("far_load", "2.0", "sliding"), ("far_load", "2.06", "sliding"), ("far_load", "2.1", "transient"),
-        ("mu", "0.5", "transient")]
-    assert list(stages[0]) == ["muL_over_ell", "varies", "n_segments", "push_speed", "stage", "parameter", "status",
-                               "f_in", "segments_per_turn", "helix_angle", "helical", "sinusoidal", "reason"]
-    assert [s["f_in"] for s in stages] == ["2.5", "2.7", "2.9", "0.6"] and stages[1]["sinusoidal"] == "0.2"
-    profiles = _rows(tmp_path / "profiles.csv")  # the far lane's last steady profile, node by node
-    prof = results[0]["lanes"][0]["profiles"][-1]
-    assert len(profiles) == 5
-    for i, p in enumerate(profiles):
-        assert int(p["node"]) == i and float(p["s_from_far_end"]) == pytest.approx(i * float(ROD.L) / 4, rel=1e-12)
-        assert float(p["theta"]) == prof["theta"][i] and float(p["wall_force"]) == 0.3
-        assert float(p["axial_force"]) == prof["axial_force"][min(i, 3)]
-        assert (p["muL_over_ell"], p["parameter"], p["mu"], p["n_segments"]) == ("0.5", "2.0", "0.5", "4")
-        assert float(p["EI"]) == float(ROD.EI) and float(p["r"]) == float(ROD.R)
-        assert float(p["w"]) == float(ROD.rho * ROD.g)
-    assert list(profiles[0]) == ["muL_over_ell", "n_segments", "push_speed", "parameter", "node", "s_from_far_end",
-                                 "theta", "wall_force", "axial_force", "mu", "EI", "w", "r"]
-    (law,) = _rows(tmp_path / "helix_laws.csv")
-    assert (law["varies"], law["parameter"], law["entry_force_over_F0"]) == ("far_load", "2.0", "2.5")
-    # the friction's bookkeeping over the whole rod: (F at the entry − F at the far end)/(μ ∫N ds)
-    assert float(law["whole_rod_dF_over_mu_int_N"]) == pytest.approx((0.55 - 0.4) / (0.5 * 0.3 * float(ROD.L)),
-                                                                     rel=1e-12)
-    assert law["helical_compared_over_ell"] == "0.0" and law["winding_over_ell"] == "0.0"
-    assert math.isnan(float(law["pitch_over_lubinski"])) and law["hand_reversals"] == "0"
-    (onset,) = _rows(tmp_path / "onsets.csv")
-    assert (onset["steady_stages"], onset["sinusoidal_onset_lo"], onset["sinusoidal_onset_hi"]) == ("2", "2.5", "2.7")
-    saved = json.loads((tmp_path / "curve.json").read_text())
-    assert (saved["model"], saved["scheme"], saved["r_over_ell"], saved["damping"], saved["f_c"]) == (
-        "rod3d", "implicit", 0.02, 20.0, 1.5)
-    assert saved["settings"] == json.loads(json.dumps(S)) and saved["wall_s_this_call"] == 7.0
-    assert saved["jobs_wall_s"] == [3.5] and len(saved["helix_laws"]) == 1 and len(saved["onsets"]) == 1
-    assert saved["curve"][0]["F_far_max_hi"] == 2.06 and math.isnan(saved["lockup_length"][0]["muL_lock_hi"])
-    assert json.dumps(summary, default=float) == json.dumps(saved)  # what it returns is what it wrote
-    assert (tmp_path / "curve.png").stat().st_size > 0
-
-
-def test_each_helix_law_column_is_the_comparisons_number_in_its_units(tmp_path, monkeypatch):
-    """helix_laws.csv holds `helix_against_laws`' numbers of each steady profile (a stand-in
-    here, with known numbers, called with the profile and the job's rod), lengths over ℓ and
-    forces over F₀, ratios as they are."""
-    from jaxrod.lockup import laws
-
-    results = _hand_results()
-    res, prof = results[0], results[0]["lanes"][0]["profiles"][0]
-    seen = []
-    hx = dict(inner_length=0.3 * ELL, F_range=(1.5 * F0, 2.25 * F0), pitch_ratio=1.1, N_ratio=0.9,
-              N_ratio_with_weight=0.8, soft_string_ratio=1.05, soft_string_ratio_whole=0.95,
-              winding_length=0.4 * ELL, reversals=3, wall_ratio_winding=0.7)
-
-    def stand_in(theta, wall_force, axial_force, l0, EI, w, r, mu, wave):
-        seen.append((theta, wall_force, axial_force, l0, EI, w, r, mu, wave))
-        return hx
-
-    monkeypatch.setattr(laws, "helix_against_laws", stand_in)
-    lx._write(str(tmp_path), dict(lx.SETTINGS["tiny"], f_c=1.5), results, 7.0)
-    assert seen == [(prof["theta"], prof["wall_force"], prof["axial_force"], res["l0"], res["EI"], res["w"], res["r"],
-                     prof["mu"], 2 * math.pi * math.sqrt(res["ell"] * res["r"]))]
-    (law,) = _rows(tmp_path / "helix_laws.csv")
-    got = {k: float(v) for k, v in law.items() if k != "varies"}
-    assert got == pytest.approx(dict(
-        muL_over_ell=0.5, n_segments=4, push_speed=0.01, parameter=2.0, entry_force_over_F0=2.5,
-        helical_compared_over_ell=0.3, F_lo_over_F0=1.5, F_hi_over_F0=2.25, pitch_over_lubinski=1.1,
-        N_over_mitchell=0.9, N_over_mitchell_plus_w=0.8, dF_ds_over_mu_N=1.05, whole_rod_dF_over_mu_int_N=0.95,
-        winding_over_ell=0.4, hand_reversals=3, winding_int_N_over_int_mitchell=0.7), rel=1e-12)
-
-
-def test_the_jobs_run_costliest_first_and_a_job_already_run_with_the_same_settings_is_skipped(
+def test_the_jobs_run_costliest_first_and_a_lane_already_run_with_the_same_settings_is_skipped(
         tmp_path, monkeypatch, capsys):
     S = dict(groups=((2.0, (0.5, 1.0), None), (4.0, (3.0,), "auto")), f_c=6.0,
              runs=((16, 0.01), (24, 0.01), (16, 0.004)), converge=(1.0, "lock"), first_push=0.4, stage_push=0.15,
@@ -262,31 +150,45 @@ def test_the_jobs_run_costliest_first_and_a_job_already_run_with_the_same_settin
     monkeypatch.setitem(lx.SETTINGS, "test", S)
     ran = []
 
-    def job(args):  # a job's JSON without lanes, where the staircase would have written it
+    def job(args):  # a job's JSON with its lanes bracketed, where the staircase would have written it
         (Lx, Xs, lock), (per_wave, speed), S_job, path, progress = args
-        ran.append(((Lx, Xs, lock), (per_wave, speed), progress))
+        ran.append(((Lx, Xs, lock), (per_wave, speed), progress, os.path.basename(path)))
         assert S_job is S
+        lanes = [dict(X=X, vary_mu=False, status="bracketed", lo=1.0, hi=1.02, stages=[], profiles=[]) for X in Xs]
+        lanes += [dict(X=1.0, vary_mu=True, status="bracketed", lo=2.0, hi=2.05, stages=[], profiles=[])] if lock else []
         with open(path, "w") as fh:
-            json.dump(dict(L_over_ell=Lx, per_wave=per_wave, speed=speed, lanes=[], wall_s=1.0, settings=S_job), fh)
+            json.dump(dict(L_over_ell=Lx, per_wave=per_wave, speed=speed, n=8, f_c=6.0, lanes=lanes, wall_s=1.0,
+                           settings=S_job, ell=1.0, r=0.02, F0=1.0, l0=0.1, EI=1.0, w=1.0), fh)
         return path
 
     monkeypatch.setattr(lx, "_job", job)
+    monkeypatch.setattr(lx, "_write", lambda out, S, results, wall: dict(results=results))
     summary = lx.lockup(str(tmp_path), quick="test", progress=True, workers=1)
     # cost: lanes × L/ℓ × segments per wave / speed
-    assert ran == [((4.0, (), "auto"), (16, 0.004), True), ((4.0, (3.0,), "auto"), (16, 0.01), True),
-                   ((4.0, (), "auto"), (24, 0.01), True), ((2.0, (1.0,), None), (16, 0.004), True),
-                   ((2.0, (0.5, 1.0), None), (16, 0.01), True), ((2.0, (1.0,), None), (24, 0.01), True)]
+    assert ran == [((4.0, (), "auto"), (16, 0.004), True, "L4_Xlock_w16_v4.json"),
+                   ((4.0, (3.0,), "auto"), (16, 0.01), True, "L4_X3-lock_w16_v10.json"),
+                   ((4.0, (), "auto"), (24, 0.01), True, "L4_Xlock_w24_v10.json"),
+                   ((2.0, (1.0,), None), (16, 0.004), True, "L2_X1_w16_v4.json"),
+                   ((2.0, (0.5, 1.0), None), (16, 0.01), True, "L2_X0.5-1_w16_v10.json"),
+                   ((2.0, (1.0,), None), (24, 0.01), True, "L2_X1_w24_v10.json")]
     assert "lock-up: 6 staircase(s) to run on 1 worker(s), f_c = 6 F0" in capsys.readouterr().out
-    assert summary["jobs_wall_s"] == [1.0] * 6 and summary["settings"] == S
-    assert isinstance(summary["wall_s_this_call"], float) and 0.0 <= summary["wall_s_this_call"] < 60.0
-    assert [r["segments_per_wave"] for r in summary["onsets"]] == [16, 16, 24]
-    # again: every job is there with the same settings; one removed and one of other settings run again
+    # one job result per lane, in the setting's order
+    assert [(r["L_over_ell"], r["per_wave"], r["speed"], [ln["X"] for ln in r["lanes"]]) for r in summary["results"]] == [
+        (2.0, 16, 0.01, [0.5]), (2.0, 16, 0.01, [1.0]), (2.0, 24, 0.01, [1.0]), (2.0, 16, 0.004, [1.0]),
+        (4.0, 16, 0.01, [3.0]), (4.0, 16, 0.01, [1.0]), (4.0, 24, 0.01, [1.0]), (4.0, 16, 0.004, [1.0])]
+    # again: every lane is there with the same settings; a job removed, one of other settings, and an
+    # open lane of fewer stages allowed than the setting's are run again (only their lanes)
     ran.clear()
-    os.remove(tmp_path / "jobs" / "L2_w24_v10.json")
-    other = tmp_path / "jobs" / "L4_w16_v10.json"
+    os.remove(tmp_path / "jobs" / "L2_X1_w24_v10.json")
+    other = tmp_path / "jobs" / "L4_X3-lock_w16_v10.json"
     other.write_text(json.dumps(dict(json.loads(other.read_text()), settings=dict(S, f_c=5.0))))
+    opened = tmp_path / "jobs" / "L2_X0.5-1_w16_v10.json"
+    d = json.loads(opened.read_text())
+    d["lanes"][0]["status"] = "open"
+    opened.write_text(json.dumps(dict(d, settings=dict(S, max_stages=1))))
     lx.lockup(str(tmp_path), quick="test", progress=False, workers=1)
-    assert ran == [((4.0, (3.0,), "auto"), (16, 0.01), False), ((2.0, (1.0,), None), (24, 0.01), False)]
+    assert [r[:2] for r in ran] == [((4.0, (3.0,), "auto"), (16, 0.01)), ((2.0, (1.0,), None), (24, 0.01)),
+                                    ((2.0, (0.5,), None), (16, 0.01))]
     ran.clear()
     lx.lockup(str(tmp_path), quick="test", progress=False)
     assert ran == []
@@ -314,10 +216,10 @@ def test_a_tiny_lockup_run_writes_its_job_and_the_files_from_it(tmp_path, monkey
              max_stages=2, saves_per_stage=11)
     monkeypatch.setitem(lx.SETTINGS, "tiny", S)
     summary = lx.lockup(str(tmp_path), quick="tiny", progress=False, workers=1)
-    assert sorted(os.listdir(tmp_path / "jobs")) == ["L1_w8_v10.json"]
-    for name in ("curve.csv", "lockup_length_at_fc.csv", "stages.csv", "onsets.csv", "curve.json", "curve.png"):
+    assert sorted(os.listdir(tmp_path / "jobs")) == ["L1_X0.5-lock_w8_v10.json"]
+    for name in ("curve.csv", "stages.csv", "onsets.csv", "curve.json", "curve.png"):
         assert (tmp_path / name).stat().st_size > 0, name
-    job = json.loads((tmp_path / "jobs" / "L1_w8_v10.json").read_text())
+    job = json.loads((tmp_path / "jobs" / "L1_X0.5-lock_w8_v10.json").read_text())
     assert N == math.ceil(8 / (2 * math.pi * math.sqrt(0.02)))
     assert (job["L_over_ell"], job["per_wave"], job["speed"], job["n"], job["f_c"], job["mu_of_X"]) == (
         1.0, 8, SPEED, N, f_c, 1.0)
@@ -334,14 +236,14 @@ def test_a_tiny_lockup_run_writes_its_job_and_the_files_from_it(tmp_path, monkey
     assert lock["stages"][0]["parameter"] == pytest.approx(lock["X"], rel=1e-9)
     assert all(1 <= len(lane["stages"]) <= 2 for lane in (far, lock))
     # the files are the job's lanes
-    (row,) = _rows(tmp_path / "curve.csv")
+    row, locks = _rows(tmp_path / "curve.csv")
     assert float(row["muL_over_ell"]) == 0.5 and int(row["n_segments"]) == N and float(row["push_speed"]) == SPEED
     assert row["status"] == far["status"] and int(row["stages"]) == len(far["stages"])
-    assert row["F_far_max_lo"] == ("nan" if far["lo"] is None else str(far["lo"]))
-    assert row["F_far_max_hi"] == ("nan" if far["hi"] is None else str(far["hi"]))
-    (locks,) = _rows(tmp_path / "lockup_length_at_fc.csv")
+    assert row["lo"] == ("nan" if far["lo"] is None else str(far["lo"]))
+    assert row["hi"] == ("nan" if far["hi"] is None else str(far["hi"]))
+    assert locks["quantity"] == "muL_lock"
     assert locks["status"] == lock["status"] and int(locks["stages"]) == len(lock["stages"])
-    assert locks["muL_lock_lo"] == ("nan" if lock["lo"] is None else str(lock["lo"]))
+    assert locks["lo"] == ("nan" if lock["lo"] is None else str(lock["lo"]))
     for k in VARIANTS:
         assert float(row[f"soft_{k}_at_fc"]) == pytest.approx(at_fc[k], rel=1e-9), k
         assert float(row[f"soft_{k}_unbounded"]) == pytest.approx(unbounded[k]["far_max"], rel=1e-9), k
@@ -355,7 +257,6 @@ def test_a_tiny_lockup_run_writes_its_job_and_the_files_from_it(tmp_path, monkey
     monkeypatch.setattr(lx, "_job", lambda args: pytest.fail("the job was run again"))
     again = lx.lockup(str(tmp_path), quick="tiny", progress=False, workers=1)
     assert json.dumps(again["curve"]) == json.dumps(summary["curve"])
-    assert json.dumps(again["lockup_length"]) == json.dumps(summary["lockup_length"])
 
 
 # --------------------------------------------------------------------------------------------

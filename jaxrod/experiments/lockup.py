@@ -37,11 +37,11 @@ VARIANTS = [("chen", "with_weight"), ("chen", "without_weight"), ("wu_juvkam_wol
             ("wu_juvkam_wold", "without_weight")]
 SETTINGS = {
     # groups: (L/ℓ, far-load lanes' μL/ℓ, the lock-up lane's first μL/ℓ, "auto" or None);
-    # runs: (segments per buckle wavelength, push speed [m/s]) — the base, twice the segments, half the speed;
-    # every lane runs at the base, the lanes in `converge` (μL/ℓ, or "lock" for the lock-up lane) at all
+    # runs: (segments per buckle wavelength, push speed [m/s]) — the base, twice the segments, half and a quarter
+    # of the speed; every lane runs at the base, the lanes in `converge` (μL/ℓ, or "lock" for the lock-up lane) at all
     False: dict(groups=((2.0, (0.5, 1.0, 1.5, 2.0), None), (4.0, (3.0, 4.0), "auto")), f_c=6.0,
-                runs=((16, 10e-3), (32, 10e-3), (16, 5e-3)), converge=(1.0, 2.0, "lock"), first_push=0.4,
-                stage_push=0.15, max_stages=12, saves_per_stage=41),
+                runs=((16, 10e-3), (32, 10e-3), (16, 5e-3), (16, 2.5e-3)), converge=(0.5, 1.0, 1.5, 2.0, 3.0, "lock"),
+                first_push=0.4, stage_push=0.15, max_stages=16, saves_per_stage=41),
     True: dict(groups=((2.0, (0.5, 1.0, 2.0), None),), f_c=6.0, runs=((16, 10e-3),), first_push=0.4,
                stage_push=0.15, max_stages=8, saves_per_stage=41),
     "tiny": dict(groups=((1.0, (0.5,), 0.5),), f_c=6.0, runs=((8, 10e-3),), first_push=0.004, stage_push=0.002,
@@ -70,8 +70,8 @@ def _closed(rod, X, f_c):
 
 
 def _jobs(S, out):
-    """(group, run, path) of every staircase of the setting: each group at the base run, and its
-    lanes in `converge` at the others."""
+    """(group, run) of every staircase of the setting: each group at the base run, and its lanes in
+    `converge` at the others."""
     conv = S.get("converge")
     for Lx, Xs, lock in S["groups"]:
         for k, run in enumerate(S["runs"]):
@@ -80,7 +80,60 @@ def _jobs(S, out):
                 xs, lk = tuple(X for X in Xs if X in conv), (lock if "lock" in conv else None)
                 if not xs and lk is None:
                     continue
-            yield (Lx, xs, lk), run, os.path.join(out, "jobs", f"L{Lx:g}_w{run[0]}_v{1e3 * run[1]:g}.json")
+            yield (Lx, xs, lk), run
+
+
+_STAGE_KEYS = ("f_c", "first_push", "stage_push", "saves_per_stage")
+
+
+def _lane_id(lane):
+    return "lock" if lane["vary_mu"] else round(float(lane["X"]), 9)
+
+
+def _stored(S, out) -> dict:
+    """The lanes already run under `out/jobs/`, by (L/ℓ, segments per wave, speed, lane: μL/ℓ or
+    "lock"): (the job's result, the lane), from every job file whose staircase settings are `S`'s
+    (`_STAGE_KEYS`) and whose lane either closed or ran at least `S`'s `max_stages`; of two, the
+    one with more stages allowed."""
+    found = {}
+    folder = os.path.join(out, "jobs")
+    for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
+        with open(os.path.join(folder, name)) as fh:
+            res = json.load(fh)
+        old = res["settings"]
+        if any(old.get(k) != S[k] for k in _STAGE_KEYS):
+            continue
+        for lane in res["lanes"]:
+            if lane["status"] == "open" and old["max_stages"] < S["max_stages"]:
+                continue
+            key = (res["L_over_ell"], res["per_wave"], res["speed"], _lane_id(lane))
+            if key not in found or found[key][0]["settings"]["max_stages"] < old["max_stages"]:
+                found[key] = (res, lane)
+    return found
+
+
+def _missing(S, out):
+    """The jobs to run: per (group, run), its lanes not yet stored (`_stored`), and the job file's
+    path (named by L/ℓ, the lanes, segments per wave and speed)."""
+    stored = _stored(S, out)
+    for (Lx, Xs, lock), run in _jobs(S, out):
+        xs = tuple(X for X in Xs if (Lx, run[0], run[1], round(float(X), 9)) not in stored)
+        lk = lock if lock is not None and (Lx, run[0], run[1], "lock") not in stored else None
+        if xs or lk is not None:
+            lanes = "-".join([f"{x:g}" for x in xs] + (["lock"] if lk is not None else []))
+            yield (Lx, xs, lk), run, os.path.join(out, "jobs", f"L{Lx:g}_X{lanes}_w{run[0]}_v{1e3 * run[1]:g}.json")
+
+
+def _results(S, out) -> list:
+    """Every lane of the setting's jobs, as job results holding one lane each (`_stored`)."""
+    stored = _stored(S, out)
+    results = []
+    for (Lx, Xs, lock), run in _jobs(S, out):
+        for lane_key in [round(float(X), 9) for X in Xs] + (["lock"] if lock is not None else []):
+            hit = stored.get((Lx, run[0], run[1], lane_key))
+            if hit is not None:
+                results.append(dict(hit[0], lanes=[hit[1]]))
+    return results
 
 
 def _job(args):
@@ -130,11 +183,7 @@ def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
     jax.config.update("jax_enable_x64", True)  # the 3D rod's runs need it, and the closed forms beside them match
     S = SETTINGS[quick]
     os.makedirs(os.path.join(out, "jobs"), exist_ok=True)
-    jobs = []
-    for g, run, path in _jobs(S, out):
-        if os.path.exists(path) and json.load(open(path)).get("settings") == json.loads(json.dumps(S)):
-            continue
-        jobs.append((g, run, S, path, progress))
+    jobs = [(g, run, S, path, progress) for g, run, path in _missing(S, out)]
     jobs.sort(key=lambda j: -(len(j[0][1]) + (j[0][2] is not None)) * j[0][0] * j[1][0] / j[1][1])  # costliest first
     workers = workers or min(len(jobs), os.cpu_count() or 1) or 1
     t = time.time()
@@ -148,11 +197,7 @@ def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
     finally:
         if pool:
             pool.shutdown()
-    results = []
-    for _, _, path in _jobs(S, out):
-        with open(path) as fh:
-            results.append(json.load(fh))
-    return _write(out, S, results, time.time() - t)
+    return _write(out, S, _results(S, out), time.time() - t)
 
 
 def _write(out, S, results, wall):
@@ -160,7 +205,7 @@ def _write(out, S, results, wall):
 
     from ..lockup.laws import helix_against_laws
 
-    curve, locks, stages, profiles, laws = [], [], [], [], []
+    curve, stages, profiles, laws = [], [], [], []
     for res in results:
         rod = push_rod(res["L_over_ell"], R_OVER_ELL, 1.0)
         for lane in res["lanes"]:
@@ -172,18 +217,15 @@ def _write(out, S, results, wall):
                         helix_angle_sliding_deg=angle)
             lo = math.nan if lane["lo"] is None else lane["lo"]
             hi = math.nan if lane["hi"] is None else lane["hi"]
-            if lane["vary_mu"]:
-                closed = _closed(rod, 1.0, res["f_c"])
-                locks.append(dict(base, muL_lock_lo=lo, muL_lock_hi=hi,
-                                  **{f"soft_{k}_at_fc": v["lock_at_fc"] for k, v in closed.items()},
-                                  **{f"soft_{k}_unbounded": v["lock"] for k, v in closed.items()}))
-            else:
-                closed = _closed(rod, lane["X"], res["f_c"])
-                curve.append(dict(muL_over_ell=lane["X"], n_segments=res["n"], push_speed=res["speed"], F_far_max_lo=lo,
-                                  F_far_max_hi=hi, status=lane["status"],
-                                  **{k: v for k, v in base.items() if k not in ("n_segments", "push_speed", "status")},
-                                  **{f"soft_{k}_at_fc": v["far_at_fc"] for k, v in closed.items()},
-                                  **{f"soft_{k}_unbounded": v["far_max"] for k, v in closed.items()}))
+            closed = _closed(rod, 1.0 if lane["vary_mu"] else lane["X"], res["f_c"])
+            at, unbounded = ("lock_at_fc", "lock") if lane["vary_mu"] else ("far_at_fc", "far_max")
+            curve.append(dict(quantity=LOCK if lane["vary_mu"] else FAR,
+                              muL_over_ell=math.nan if lane["vary_mu"] else lane["X"], n_segments=res["n"],
+                              push_speed=res["speed"], protocol="staircase", kind="run", lo=lo, hi=hi,
+                              status=lane["status"],
+                              **{k: v for k, v in base.items() if k not in ("n_segments", "push_speed", "status")},
+                              **{f"soft_{k}_at_fc": v[at] for k, v in closed.items()},
+                              **{f"soft_{k}_unbounded": v[unbounded] for k, v in closed.items()}))
             for s in lane["stages"]:
                 stages.append(dict(muL_over_ell=lane["X"], varies="mu" if lane["vary_mu"] else "far_load",
                                    n_segments=res["n"], push_speed=res["speed"], **{k: v for k, v in s.items()}))
@@ -209,19 +251,82 @@ def _write(out, S, results, wall):
                                          parameter=p["parameter"], node=i, s_from_far_end=i * res["l0"], theta=th,
                                          wall_force=N, axial_force=F, mu=p["mu"], EI=res["EI"], w=res["w"], r=res["r"]))
     onsets = _onsets(results)
+    job_walls = {(r["L_over_ell"], r["per_wave"], r["speed"], r["wall_s"]): r["wall_s"] for r in results}  # per job
+    curve += converged(curve, S)
+    cols = list(dict.fromkeys(k for r in curve for k in r))  # the converged rows' columns, empty in the runs'
+    curve = [{k: r.get(k, math.nan) for k in cols} for r in curve]
     write_csv(os.path.join(out, "onsets.csv"), onsets)
     write_csv(os.path.join(out, "curve.csv"), curve)
-    write_csv(os.path.join(out, "lockup_length_at_fc.csv"), locks)
     write_csv(os.path.join(out, "stages.csv"), stages)
     write_csv(os.path.join(out, "profiles.csv"), profiles)
     write_csv(os.path.join(out, "helix_laws.csv"), laws)
     summary = dict(model="rod3d", scheme="implicit", r_over_ell=R_OVER_ELL, damping=DAMPING, f_c=S["f_c"],
-                   settings=S, wall_s_this_call=wall, jobs_wall_s=[r["wall_s"] for r in results],
-                   curve=curve, lockup_length=locks, helix_laws=laws, onsets=onsets)
+                   settings=S, wall_s_this_call=wall, jobs_wall_s=list(job_walls.values()),
+                   curve=curve, helix_laws=laws, onsets=onsets)
     with open(os.path.join(out, "curve.json"), "w") as fh:
         json.dump(summary, fh, indent=1, default=float)
-    _figure(out, S, curve, locks)
+    _figure(out, S, curve)
     return summary
+
+
+FAR, LOCK = "F_far_max", "muL_lock"
+"""The two quantities of `curve.csv`: F_far,max(f_c)/F₀ at a μL/ℓ, and μL_lock(f_c)/ℓ."""
+SEGMENTS_TOL, SPEED_TOL = 0.02, 0.01
+"""Converged in segments: n against 2n within 2 %; in push speed: v/2 against v/4 within 1 %."""
+
+
+def _mid(row):
+    return 0.5 * (row["lo"] + row["hi"]), 0.5 * (row["hi"] - row["lo"])
+
+
+def converged(rows, S) -> list:
+    """One `kind="converged"` row per point (quantity, μL/ℓ) with runs at the base (n, v), 2n and
+    v/2, v/4 (`S["runs"]`), from the bracket midpoints m and half-widths w:
+
+    - in push speed: converged when v/4 and v/2 agree within `SPEED_TOL`; then the value is
+      m(v/4) and its speed error |m(v/4) − m(v/2)|; otherwise the value is extrapolated to v → 0,
+      linearly through v/2 and v/4 (2 m(v/4) − m(v/2)), its speed error the distance to the
+      quadratic extrapolation through v, v/2 and v/4 ((8 m(v/4) − 6 m(v/2) + m(v))/3);
+    - the error bar: that speed error, plus the brackets' half-widths as the value carries them
+      (w(v/4); extrapolated 2 w(v/4) + w(v/2)), plus the segment error |m(2n) − m(n)| at v;
+      `lo`, `hi` the value ± the bar;
+    - `d_segments` (2n against n), `d_half_speed` (v/2 against v), `d_quarter_speed` (v/4
+      against v/2): relative differences of the midpoints; `converged_segments`,
+      `converged_speed`: within `SEGMENTS_TOL`, `SPEED_TOL`.
+
+    A point without all four runs bracketed gets none."""
+    (w0, v0), *others = S["runs"]
+    want = {"base": (w0, v0), "fine": (2 * w0, v0), "half": (w0, v0 / 2), "quarter": (w0, v0 / 4)}
+    if any(r not in S["runs"] for r in want.values()):
+        return []
+    out = []
+    points = sorted({(r["quantity"], r["muL_over_ell"]) for r in rows if r["kind"] == "run"},
+                    key=lambda k: (k[0], 0.0 if math.isnan(k[1]) else k[1]))
+    for quantity, X in points:
+        runs = {}
+        for name, (w, v) in want.items():
+            hit = [r for r in rows if r["kind"] == "run" and r["quantity"] == quantity
+                   and (r["muL_over_ell"] == X or (math.isnan(X) and math.isnan(r["muL_over_ell"])))
+                   and r["segments_per_wave"] == w and math.isclose(r["push_speed"], v) and r["status"] == "bracketed"]
+            if hit:
+                runs[name] = hit[0]
+        if len(runs) < 4:
+            continue
+        (mb, _), (mf, _), (mh, wh), (mq, wq) = (_mid(runs[k]) for k in ("base", "fine", "half", "quarter"))
+        d_seg, d_half, d_quarter = mf / mb - 1, mh / mb - 1, mq / mh - 1
+        speed_ok = abs(d_quarter) <= SPEED_TOL
+        if speed_ok:
+            value, speed_err, bracket = mq, abs(mq - mh), wq
+        else:
+            value = 2 * mq - mh
+            speed_err, bracket = abs(value - (8 * mq - 6 * mh + mb) / 3), 2 * wq + wh
+        bar = speed_err + bracket + abs(mf - mb)
+        out.append(dict(runs["base"], kind="converged", push_speed=0.0, lo=value - bar, hi=value + bar,
+                        status="converged in speed" if speed_ok else "extrapolated to v = 0", stages=math.nan,
+                        quasi_static=value, error_bar=bar, d_segments=d_seg, d_half_speed=d_half,
+                        d_quarter_speed=d_quarter, converged_segments=abs(d_seg) <= SEGMENTS_TOL,
+                        converged_speed=speed_ok))
+    return out
 
 
 def _onsets(results):
@@ -244,7 +349,7 @@ def _onsets(results):
     return rows
 
 
-def _figure(out, S, curve, locks):
+def _figure(out, S, curve):
     import jax.numpy as jnp
 
     from ..lockup import chain
@@ -265,22 +370,33 @@ def _figure(out, S, curve, locks):
         ax.plot(X, at, "-", color=c, lw=1.2, label=f"{name}: at f_in = {S['f_c']:g}")
         ax.plot(X, lim, ":", color=c, lw=1, label=f"{name}: f_in → ∞")
     marks = {}
-    for row in curve + locks:
-        key = (row["segments_per_wave"], row["push_speed"])
-        style = marks.setdefault(key, ("k", "C4", "C5", "C6")[len(marks) % 4])
-        dx = 0.04 * (list(marks).index(key) - 1)
-        if "muL_lock_lo" in row:  # the lock-up length: a bracket along μL/ℓ at F_far = 0
-            lo, hi = row["muL_lock_lo"], row["muL_lock_hi"]
-            if np.isfinite(lo) and np.isfinite(hi):
-                ax.plot([lo, hi], [-0.08 * (1 + list(marks).index(key))] * 2, "-", color=style, lw=4)
+    for row in curve:
+        if row["kind"] != "run":
             continue
-        lo, hi = row["F_far_max_lo"], row["F_far_max_hi"]
+        key = (row["segments_per_wave"], row["push_speed"])
+        style = marks.setdefault(key, ("k", "C4", "C5", "C6", "C7")[len(marks) % 5])
+        dx = 0.04 * (list(marks).index(key) - 1)
+        lo, hi = row["lo"], row["hi"]
+        if row["quantity"] == LOCK:  # the lock-up length: a bracket along μL/ℓ at F_far = 0
+            if np.isfinite(lo) and np.isfinite(hi):
+                ax.plot([lo, hi], [-0.06 * (1 + list(marks).index(key))] * 2, "-", color=style, lw=3)
+            continue
         if np.isfinite(lo) and np.isfinite(hi):
-            ax.plot([row["muL_over_ell"] + dx] * 2, [lo, hi], "-", color=style, lw=4)
+            ax.plot([row["muL_over_ell"] + dx] * 2, [lo, hi], "-", color=style, lw=3)
         elif np.isfinite(lo):
             ax.plot(row["muL_over_ell"] + dx, lo, "^", color=style)
         elif np.isfinite(hi):
             ax.plot(row["muL_over_ell"] + dx, hi, "v", color=style)
+    done = [r for r in curve if r["kind"] == "converged"]
+    far = [r for r in done if r["quantity"] == FAR]
+    if far:
+        ax.errorbar([r["muL_over_ell"] + 0.12 for r in far], [r["quasi_static"] for r in far],
+                    yerr=[r["error_bar"] for r in far], fmt="o", color="C3", ms=4, capsize=3,
+                    label="3D rod, quasi-static (v → 0) ± error bar")
+    for r in done:
+        if r["quantity"] == LOCK:
+            ax.errorbar([r["quasi_static"]], [-0.06 * (len(marks) + 1)], xerr=[r["error_bar"]], fmt="o", color="C3",
+                        ms=4, capsize=3)
     for key, style in marks.items():
         ax.plot([], [], "-", color=style, lw=4, label=f"3D rod, {key[0]} segments per wave, {1e3 * key[1]:g} mm/s")
     ax.axhline(0.0, color="0.6", lw=0.5)
