@@ -67,3 +67,36 @@ def test_the_readme_quotes_the_files():
     assert f"{lo:.3f}–{hi:.3f}" in readme
     summary = json.loads((DATA / "curve.json").read_text())
     assert f"{summary['wall_s_this_call'] / 60:.1f} min" in readme
+
+
+def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_quotes_them():
+    """Each `kind = converged` row of the committed curve.csv is what
+    `jaxrod.experiments.lockup.converged` gives from the file's own run rows (every point of the
+    setting but μL/ℓ = 4 has one), and the README's converged figures are the file's."""
+    from jaxrod.experiments import lockup as lx
+
+    def typed(row):
+        out = dict(row)
+        for k in ("muL_over_ell", "push_speed", "lo", "hi"):
+            out[k] = float(row[k])
+        out["segments_per_wave"] = int(row["segments_per_wave"])
+        return out
+
+    rows = _rows("curve.csv")
+    runs = [typed(r) for r in rows if r["kind"] == "run"]
+    committed = [r for r in rows if r["kind"] == "converged"]
+    again = lx.converged(runs, lx.SETTINGS[False])
+    assert [(r["quantity"], r["muL_over_ell"]) for r in committed] == [
+        ("F_far_max", "0.5"), ("F_far_max", "1.0"), ("F_far_max", "1.5"), ("F_far_max", "2.0"), ("F_far_max", "3.0"),
+        ("muL_lock", "nan")]
+    for row, mine in zip(committed, again):
+        for k in ("quasi_static", "error_bar", "d_segments", "d_half_speed", "d_quarter_speed", "lo", "hi"):
+            assert float(row[k]) == pytest.approx(mine[k], rel=1e-12), (row["muL_over_ell"], k)
+        assert (row["converged_segments"], row["converged_speed"]) == (
+            str(int(mine["converged_segments"])), str(int(mine["converged_speed"])))
+    readme = (ROOT / "README.md").read_text()
+    ok = [r for r in committed if r["converged_segments"] == "1" and r["converged_speed"] == "1"]
+    assert [(r["quantity"], r["muL_over_ell"]) for r in ok] == [("F_far_max", "1.0"), ("F_far_max", "2.0"),
+                                                                  ("muL_lock", "nan")]
+    for r in ok:
+        assert f"{float(r['quasi_static']):.3f} ± {float(r['error_bar']):.3f}" in readme
