@@ -92,3 +92,23 @@ def test_the_command_given_a_tubing_in_si_gives_the_dimensionless_cases_answer_i
         assert math.isclose(x, y * F0, rel_tol=1e-9)
     assert math.isclose(s["soft_string_lockup_length_m"], 4.059 * ell / 0.5, rel_tol=1e-3)
     assert all(math.isclose(v, 1.0 * F0, rel_tol=1e-9) for v in s["soft_string_entry_force_N"].values())
+
+
+def test_the_command_builds_the_tubing_in_float64_in_a_fresh_process(tmp_path):
+    """In a fresh process (float64 off until the command turns it on) `jaxrod lockup` given a
+    tubing hands `inject` a float64 rod: no traceback (the rod once was built by the argument
+    check, in float32). `inject` is replaced by a stand-in that reports the dtype and stops."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, jaxrod.lockup.push as p\n"
+        "def stop(rod, *a, **k):\n"
+        "    print('dtype', rod.EI.dtype); sys.exit(7)\n"
+        "p.inject = stop\n"
+        "from jaxrod.cli import main\n"
+        "main(['lockup', '--E', '200e9', '--od', '0.0508', '--id', '0.04191', '--density', '7850', '--clearance',"
+        " '0.0254', '--length', '300', '--mu', '0.3', '--far-force', '20000', '--quiet', '--out', sys.argv[1]])\n")
+    run = subprocess.run([sys.executable, "-c", code, str(tmp_path / "lk")], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 7, run.stderr[-2000:]
+    assert run.stdout.strip().splitlines()[-1] == "dtype float64"

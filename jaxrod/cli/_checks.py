@@ -98,10 +98,10 @@ _TUBING_ARGS = {"E": "--E", "outer_diameter": "--od", "inner_diameter": "--id", 
 
 
 def _check_lockup(args) -> None:
-    """Checks the case, or builds the tubing's rod (`args.tubing_rod`) from the SI options, each
-    error naming its option."""
+    """Checks the case, or the tubing given by the SI options (`args.tubing`: the arguments of
+    `jaxrod.lockup.si.tubing`, or None), each error naming its option."""
     given = {name: getattr(args, name) for name in ("E", "od", "id", "density", "weight", "clearance", "length", "nu")}
-    args.tubing_rod = None
+    args.tubing = None
     if any(v is not None for v in given.values()):
         if args.mu_L is not None or args.r_over_ell is not None:
             _fail("arguments --mu-L/--r-over-ell and a tubing (--E, --od, ...) describe the case twice: give one.")
@@ -112,10 +112,11 @@ def _check_lockup(args) -> None:
             _fail(f"a tubing in SI units needs {', '.join(missing)} as well.")
         from ..lockup.si import tubing
 
+        args.tubing = dict(E=args.E, outer_diameter=args.od, clearance=args.clearance, length=args.length, mu=args.mu,
+                           inner_diameter=args.id or 0.0, density=args.density, weight_per_length=args.weight,
+                           nu=0.3 if args.nu is None else args.nu)
         try:
-            args.tubing_rod = tubing(args.E, args.od, args.clearance, args.length, args.mu,
-                                     inner_diameter=args.id or 0.0, density=args.density,
-                                     weight_per_length=args.weight, nu=0.3 if args.nu is None else args.nu)
+            tubing(**args.tubing)  # the command builds it again once float64 is on
         except ValueError as err:
             name, _, rest = str(err).partition(" = ")
             _fail(f"argument {_TUBING_ARGS.get(name, name)}: {rest}" if name in _TUBING_ARGS else str(err))

@@ -19,12 +19,12 @@ def _cmd_lockup(args) -> int:
     from ..lockup import chain
     from ..lockup.closed_forms import HELICAL_LAWS, HELICAL_ONSETS
     from ..lockup.push import inject, push_rod, units
-    from ..lockup.si import case
+    from ..lockup.si import case, tubing
     from ..lockup.verdict import turn_resolution, verdict
     from ..output import write_csv
 
-    # the values were checked by cli._checks (before any work), which also built the tubing's rod
-    rod = args.tubing_rod if args.tubing_rod is not None else push_rod(args.mu_L, args.r_over_ell, args.mu)
+    # the values were checked by cli._checks (before any work); the rods are built here, in float64
+    rod = tubing(**args.tubing) if args.tubing is not None else push_rod(args.mu_L, args.r_over_ell, args.mu)
     F0, ell = units(rod)
     args.mu_L, args.r_over_ell = case(rod)["mu_L_over_ell"], case(rod)["r_over_ell"]
     if args.far_force is not None:
