@@ -112,3 +112,28 @@ def test_the_command_builds_the_tubing_in_float64_in_a_fresh_process(tmp_path):
     run = subprocess.run([sys.executable, "-c", code, str(tmp_path / "lk")], capture_output=True, text=True, timeout=120)
     assert run.returncode == 7, run.stderr[-2000:]
     assert run.stdout.strip().splitlines()[-1] == "dtype float64"
+
+
+def test_the_committed_examples_are_steady_slides_and_the_docs_quote_them():
+    """The two SI examples (`results/lockup/si/`): steady slides (the verdict), their SI figures
+    F₀ times the dimensionless ones, between Wu & Juvkam-Wold's chain and Chen's with the weight
+    term, and quoted so in docs/physics.md §8."""
+    import pathlib
+
+    root = pathlib.Path(__file__).parent.parent
+    docs = (root / "docs" / "physics.md").read_text()
+    for name, quote in (("coiled_tubing", "**25.97 kN**"), ("guidewire", "**0.0806–0.0812 N**")):
+        d = json.loads((root / "results" / "lockup" / "si" / name / "lockup.json").read_text())
+        si = d["si"]
+        assert d["verdict"]["status"] == "sliding" and d["result"] == "successful"
+        lo, hi = si["entry_force_N_last_fifth"]
+        f_lo, f_hi = d["entry_force_over_F0_last_fifth"]
+        assert math.isclose(lo, f_lo * si["F0_N"], rel_tol=1e-9) and math.isclose(hi, f_hi * si["F0_N"], rel_tol=1e-9)
+        soft = si["soft_string_entry_force_N"]
+        assert soft["wu_juvkam_wold / with_weight"] < lo <= hi < soft["chen / with_weight"]
+        assert quote in docs
+        c = case(tubing(**{"E": {"coiled_tubing": 200e9, "guidewire": 60e9}[name]},
+                        **({"outer_diameter": 0.0508, "inner_diameter": 0.04191, "density": 7850.0, "clearance": 0.0254,
+                            "length": 300.0, "mu": 0.3} if name == "coiled_tubing" else
+                           {"outer_diameter": 3.6e-4, "density": 6450.0, "clearance": 5e-4, "length": 2.0, "mu": 0.3})))
+        assert math.isclose(c["F0"], si["F0_N"], rel_tol=1e-12) and math.isclose(c["ell"], si["ell_m"], rel_tol=1e-12)
