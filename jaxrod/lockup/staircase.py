@@ -19,9 +19,9 @@ answer is the same question at a bounded entry force f_c [F₀] that the rod res
 length — is raised stage by stage, the rod carried over from one stage to the next (loading
 only: it is never lowered, so no stage unloads a helix). Each stage is read by `verdict`:
 
-- sliding with f̄ ≤ f_c: a lower bound; the next stage raises the parameter toward the
-  secant's estimate of where f̄ = f_c (on log f̄), at most 70 % of the way and at least the
-  bracket's target width;
+- sliding with f̄ ≤ f_c: a lower bound; the next stage raises the parameter half of the way
+  to the secant's estimate of where f̄ = f_c (on log f̄), by at most 12 % and at least
+  0.9 × `rel` of it (`_next`);
 - sliding with f̄ > f_c, or locked: an upper bound, and the lane stops (bracketed if the two
   bounds are within `rel`, else `wide`);
 - transient: the stage is repeated at the same parameter (at most `repeats` times, then the lane
