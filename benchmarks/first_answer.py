@@ -3,6 +3,7 @@ process — cold (empty compilation cache) and warm (the same command again) —
 import, tracing, XLA compilation and the rest (the run, and Python around it).
 
     python benchmarks/first_answer.py [--ref REV ...] [--only NAME ...] [--out DIR]
+                                      [--variant 'LABEL:KEY=VALUE,...' ...]
 
 Each case runs as its own process with `JAX_LOG_COMPILES=1`: tracing and compilation are the
 sums of JAX's "Finished tracing" / "Finished jaxpr to MLIR" and "Finished XLA compilation"
@@ -85,9 +86,9 @@ def _notebook_code(path: str) -> str:
     return "import matplotlib\nmatplotlib.use('Agg')\n" + "\n".join(code)
 
 
-def _run(case, src: str, cache: str, env_base: dict) -> dict:
+def _run(case, src: str, cache: str, env_base: dict, variant: dict | None = None) -> dict:
     name, kind, what = case
-    env = dict(env_base, JAX_LOG_COMPILES="1", JAXROD_CACHE_DIR=cache, MPLBACKEND="Agg")
+    env = {**env_base, "JAX_LOG_COMPILES": "1", "JAXROD_CACHE_DIR": cache, "MPLBACKEND": "Agg", **(variant or {})}
     out = tempfile.mkdtemp(prefix="jaxrod-first-")
     if kind == "cli":
         cmd = [sys.executable, "-m", "jaxrod", *[out if a == "OUT" else a for a in what]]
@@ -127,17 +128,25 @@ def main(argv=None) -> int:
     p.add_argument("--ref", nargs="*", default=[], help="reference revisions, run side by side")
     p.add_argument("--only", nargs="*", default=None, help="case names to run (default: all)")
     p.add_argument("--out", default=OUT, help="folder for first_answer.csv and .md")
+    p.add_argument("--variant", nargs="*", default=[], metavar="LABEL:KEY=VALUE[,KEY=VALUE]",
+                   help="this revision again with these environment variables (e.g. 'no cache:JAXROD_CACHE_DIR=off')")
     a = p.parse_args(argv)
     cases = [c for c in CASES if a.only is None or c[0] in a.only]
+    variants = []
+    for spec in a.variant:
+        label, _, pairs = spec.partition(":")
+        variants.append((label, dict(kv.split("=", 1) for kv in pairs.split(",") if kv)))
     rows = []
-    for rev in ["WORKTREE", *a.ref]:
+    for rev, label, variant in [("WORKTREE", None, None), *[("WORKTREE", lb, v) for lb, v in variants],
+                                *[(r, None, None) for r in a.ref]]:
         src, sha = _revision(rev)
+        sha = sha if label is None else f"{sha} ({label})"
         env = {k: v for k, v in os.environ.items() if not k.startswith(("JAX_", "JAXROD_", "XLA_"))}
         env["PYTHONPATH"] = src
         for case in cases:
             cache = tempfile.mkdtemp(prefix="jaxrod-cache-")
             for state in ("cold", "warm"):
-                r = _run(case, src, cache, env)
+                r = _run(case, src, cache, env, variant)
                 rows.append({"commit": sha, "case": case[0], "state": state, **{k: r[k] for k in ("wall", "trace", "compile")},
                              "rest": r["wall"] - r["trace"] - r["compile"], "rc": r["rc"]})
                 print(f"{sha:>16} {case[0]:<30} {state}: {r['wall']:6.1f} s (trace {r['trace']:5.1f}, compile "
