@@ -100,3 +100,21 @@ def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_
                                                                   ("muL_lock", "nan")]
     for r in ok:
         assert f"{float(r['quasi_static']):.3f} ± {float(r['error_bar']):.3f}" in readme
+
+
+def test_a_single_step_to_the_far_load_slides_at_a_higher_entry_force_than_the_staircase():
+    """`results/lockup/path/`: the base staircase's far loads at μL/ℓ = 1, reached from the straight
+    rod in one step, slide (the verdict) at entry forces 26–29 % above the staircase's steady
+    stage at the same far load, as docs/physics.md §8 and the README say."""
+    stages = {round(float(s["parameter"]), 4): float(s["f_in"]) for s in _rows("stages.csv")
+              if s["muL_over_ell"] == "1.0" and s["varies"] == "far_load" and s["n_segments"] == "37"
+              and s["push_speed"] == "0.01" and s["status"] == "sliding"}
+    rises = []
+    for far in (2.7709, 2.8458):
+        d = json.loads((DATA / "path" / f"single_step_muL1_far{far:.4f}" / "lockup.json").read_text())
+        assert d["verdict"]["status"] == "sliding" and d["mu_L_over_ell"] == pytest.approx(1.0)
+        assert d["far_load_over_F0"] == pytest.approx(far, abs=1e-4)
+        rises.append(d["verdict"]["force"][1] / stages[far] - 1)
+    assert [f"+{100 * r:.0f} %" for r in rises] == ["+26 %", "+29 %"]
+    assert "(+26 % and +29 %" in (ROOT / "docs" / "physics.md").read_text()
+    assert "by +29 % at μL/ℓ = 1 when the far load comes in one step" in (ROOT / "README.md").read_text()
