@@ -116,5 +116,14 @@ def test_a_single_step_to_the_far_load_slides_at_a_higher_entry_force_than_the_s
         assert d["far_load_over_F0"] == pytest.approx(far, abs=1e-4)
         rises.append(d["verdict"]["force"][1] / stages[far] - 1)
     assert [f"+{100 * r:.0f} %" for r in rises] == ["+26 %", "+29 %"]
+    # at μL/ℓ = 2 (its lane: L = 2ℓ, μ = 1, 37 segments) the band is a few per cent
+    stages2 = {round(float(s["parameter"]), 4): float(s["f_in"]) for s in _rows("stages.csv")
+               if s["muL_over_ell"] == "2.0" and s["varies"] == "far_load" and s["n_segments"] == "37"
+               and s["push_speed"] == "0.01" and s["status"] == "sliding"}
+    for far, text in ((1.3310, "−0.3 %"), (1.5883, "+4.0 %")):
+        d = json.loads((DATA / "path" / f"single_step_muL2_far{far:.4f}" / "lockup.json").read_text())
+        assert d["verdict"]["status"] == "sliding" and d["n_segments"] == 37 and d["mu"] == 1.0
+        change = 100 * (d["verdict"]["force"][1] / stages2[far] - 1)
+        assert f"{change:+.1f} %".replace("-", "−") == text
     assert "(+26 % and +29 %" in (ROOT / "docs" / "physics.md").read_text()
     assert "by +29 % at μL/ℓ = 1 when the far load comes in one step" in (ROOT / "README.md").read_text()
