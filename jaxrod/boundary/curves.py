@@ -162,6 +162,18 @@ def _on_devices(fn, devices, batched: int = 2):
                                  check_vma=False))
 
 
+def _in_chunks(run, width, idx, args_of, out, bar):
+    """`run(*args_of(chunk))` (`_on_devices` over `width` devices) over the points `idx`, `width`
+    at a time (the last chunk padded with its last point), each point's result put in `out[i]`."""
+    for start in range(0, len(idx), width):
+        chunk = idx[np.arange(start, start + width).clip(max=len(idx) - 1)]
+        res = run(*args_of(chunk))
+        k = min(width, len(idx) - start)
+        for j in range(k):
+            out[chunk[j]] = jax.tree_util.tree_map(lambda a: np.asarray(a)[j], res)
+        bar.update(k)
+
+
 def _seeded_bisection(rod, dFs, bracket, width, n, dt, progress, *, model, mode, rtol, max_iter, t1, method,
                       sensitivities):
     """`boundary_curve` by label bisection around the field model's boundary (its docstring):
@@ -187,14 +199,8 @@ def _seeded_bisection(rod, dFs, bracket, width, n, dt, progress, *, model, mode,
             r, dF, g, lo, hi, model=model, mode=mode, n=n_, dt=dt_, rtol=rtol, max_iter=max_iter, t1=t1, width=width,
             sensitivities=tuple(sensitivities), scheme=scheme)
         devices = jax.local_devices()[:len(idx)]
-        run = _on_devices(one, devices)
-        for start in range(0, len(idx), len(devices)):
-            chunk = idx[np.arange(start, start + len(devices)).clip(max=len(idx) - 1)]  # the last chunk padded
-            res = run(rod, jnp.asarray(dFs[chunk], dtype), jnp.asarray(guess[chunk], dtype))
-            k = min(len(devices), len(idx) - start)
-            for j in range(k):
-                out[chunk[j]] = jax.tree_util.tree_map(lambda a: np.asarray(a)[j], res)
-            bar.update(k)
+        args_of = lambda chunk: (rod, jnp.asarray(dFs[chunk], dtype), jnp.asarray(guess[chunk], dtype))
+        _in_chunks(_on_devices(one, devices), len(devices), idx, args_of, out, bar)
     bar.close()
     return jax.tree_util.tree_map(lambda *a: jnp.asarray(np.stack(a)), *out)
 
@@ -279,17 +285,11 @@ def _seeded_critical_load(mus, amplitude, bracket, width, n, dt, progress, *, pe
         return _named(res), sens
 
     devices = jax.local_devices()[:len(index)]
-    run = _on_devices(one, devices, batched=3)
     out = [None] * len(index)
     bar = _progress(len(index), progress)
-    for start in range(0, len(index), len(devices)):
-        chunk = index[np.arange(start, start + len(devices)).clip(max=len(index) - 1)]  # the last chunk padded
-        res = run(jnp.asarray(amplitude, dtype), jnp.asarray(mu_of[chunk], dtype), jnp.asarray(chunk),
-                  jnp.asarray(guess[chunk], dtype))
-        k = min(len(devices), len(index) - start)
-        for j in range(k):
-            out[chunk[j]] = jax.tree_util.tree_map(lambda a: np.asarray(a)[j], res)
-        bar.update(k)
+    args_of = lambda chunk: (jnp.asarray(amplitude, dtype), jnp.asarray(mu_of[chunk], dtype), jnp.asarray(chunk),
+                             jnp.asarray(guess[chunk], dtype))
+    _in_chunks(_on_devices(one, devices, batched=3), len(devices), index, args_of, out, bar)
     bar.close()
     shape = (len(mus), realizations)
     return jax.tree_util.tree_map(lambda *a: jnp.asarray(np.stack(a).reshape(shape + np.shape(a[0]))), *out)

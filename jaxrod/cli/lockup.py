@@ -26,7 +26,8 @@ def _cmd_lockup(args) -> int:
     # the values were checked by cli._checks (before any work); the rods are built here, in float64
     rod = tubing(**args.tubing) if args.tubing is not None else push_rod(args.mu_L, args.r_over_ell, args.mu)
     F0, ell = units(rod)
-    args.mu_L, args.r_over_ell = case(rod)["mu_L_over_ell"], case(rod)["r_over_ell"]
+    c = case(rod)
+    args.mu_L, args.r_over_ell = c["mu_L_over_ell"], c["r_over_ell"]
     if args.far_force is not None:
         args.far_load = args.far_force / F0
     w = float(rod.rho * rod.g)

@@ -29,8 +29,9 @@ import time
 import numpy as np
 
 from ..output import write_csv
+from .lockup_convergence import FAR, LOCK, converged
 
-__all__ = ["lockup", "SETTINGS", "VARIANTS"]
+__all__ = ["lockup", "converged", "SETTINGS", "VARIANTS"]
 
 DAMPING, R_OVER_ELL = 20.0, 0.02
 VARIANTS = [("chen", "with_weight"), ("chen", "without_weight"), ("wu_juvkam_wold", "with_weight"),
@@ -69,7 +70,7 @@ def _closed(rod, X, f_c):
     return out
 
 
-def _jobs(S, out):
+def _jobs(S):
     """(group, run) of every staircase of the setting: each group at the base run, and its lanes in
     `converge` at the others."""
     conv = S.get("converge")
@@ -86,8 +87,13 @@ def _jobs(S, out):
 _STAGE_KEYS = ("f_c", "first_push", "stage_push", "saves_per_stage")
 
 
+def _lane_key(X):
+    """A far-load lane's key in the job files: its μL/ℓ, rounded (the lock-up lane's: "lock")."""
+    return round(float(X), 9)
+
+
 def _lane_id(lane):
-    return "lock" if lane["vary_mu"] else round(float(lane["X"]), 9)
+    return "lock" if lane["vary_mu"] else _lane_key(lane["X"])
 
 
 def _stored(S, out) -> dict:
@@ -116,8 +122,8 @@ def _missing(S, out):
     """The jobs to run: per (group, run), its lanes not yet stored (`_stored`), and the job file's
     path (named by L/ℓ, the lanes, segments per wave and speed)."""
     stored = _stored(S, out)
-    for (Lx, Xs, lock), run in _jobs(S, out):
-        xs = tuple(X for X in Xs if (Lx, run[0], run[1], round(float(X), 9)) not in stored)
+    for (Lx, Xs, lock), run in _jobs(S):
+        xs = tuple(X for X in Xs if (Lx, run[0], run[1], _lane_key(X)) not in stored)
         lk = lock if lock is not None and (Lx, run[0], run[1], "lock") not in stored else None
         if xs or lk is not None:
             lanes = "-".join([f"{x:g}" for x in xs] + (["lock"] if lk is not None else []))
@@ -128,8 +134,8 @@ def _results(S, out) -> list:
     """Every lane of the setting's jobs, as job results holding one lane each (`_stored`)."""
     stored = _stored(S, out)
     results = []
-    for (Lx, Xs, lock), run in _jobs(S, out):
-        for lane_key in [round(float(X), 9) for X in Xs] + (["lock"] if lock is not None else []):
+    for (Lx, Xs, lock), run in _jobs(S):
+        for lane_key in [_lane_key(X) for X in Xs] + (["lock"] if lock is not None else []):
             hit = stored.get((Lx, run[0], run[1], lane_key))
             if hit is not None:
                 results.append(dict(hit[0], lanes=[hit[1]]))
@@ -267,66 +273,6 @@ def _write(out, S, results, wall):
         json.dump(summary, fh, indent=1, default=float)
     _figure(out, S, curve)
     return summary
-
-
-FAR, LOCK = "F_far_max", "muL_lock"
-"""The two quantities of `curve.csv`: F_far,max(f_c)/F₀ at a μL/ℓ, and μL_lock(f_c)/ℓ."""
-SEGMENTS_TOL, SPEED_TOL = 0.02, 0.01
-"""Converged in segments: n against 2n within 2 %; in push speed: v/2 against v/4 within 1 %."""
-
-
-def _mid(row):
-    return 0.5 * (row["lo"] + row["hi"]), 0.5 * (row["hi"] - row["lo"])
-
-
-def converged(rows, S) -> list:
-    """One `kind="converged"` row per point (quantity, μL/ℓ) with runs at the base (n, v), 2n and
-    v/2, v/4 (`S["runs"]`), from the bracket midpoints m and half-widths w:
-
-    - in push speed: converged when v/4 and v/2 agree within `SPEED_TOL`; then the value is
-      m(v/4) and its speed error |m(v/4) − m(v/2)|; otherwise the value is extrapolated to v → 0,
-      linearly through v/2 and v/4 (2 m(v/4) − m(v/2)), its speed error the distance to the
-      quadratic extrapolation through v, v/2 and v/4 ((8 m(v/4) − 6 m(v/2) + m(v))/3);
-    - the error bar: that speed error, plus the brackets' half-widths as the value carries them
-      (w(v/4); extrapolated 2 w(v/4) + w(v/2)), plus the segment error |m(2n) − m(n)| at v;
-      `lo`, `hi` the value ± the bar;
-    - `d_segments` (2n against n), `d_half_speed` (v/2 against v), `d_quarter_speed` (v/4
-      against v/2): relative differences of the midpoints; `converged_segments`,
-      `converged_speed`: within `SEGMENTS_TOL`, `SPEED_TOL`.
-
-    A point without all four runs bracketed gets none."""
-    (w0, v0), *others = S["runs"]
-    want = {"base": (w0, v0), "fine": (2 * w0, v0), "half": (w0, v0 / 2), "quarter": (w0, v0 / 4)}
-    if any(r not in S["runs"] for r in want.values()):
-        return []
-    out = []
-    points = sorted({(r["quantity"], r["muL_over_ell"]) for r in rows if r["kind"] == "run"},
-                    key=lambda k: (k[0], 0.0 if math.isnan(k[1]) else k[1]))
-    for quantity, X in points:
-        runs = {}
-        for name, (w, v) in want.items():
-            hit = [r for r in rows if r["kind"] == "run" and r["quantity"] == quantity
-                   and (r["muL_over_ell"] == X or (math.isnan(X) and math.isnan(r["muL_over_ell"])))
-                   and r["segments_per_wave"] == w and math.isclose(r["push_speed"], v) and r["status"] == "bracketed"]
-            if hit:
-                runs[name] = hit[0]
-        if len(runs) < 4:
-            continue
-        (mb, _), (mf, _), (mh, wh), (mq, wq) = (_mid(runs[k]) for k in ("base", "fine", "half", "quarter"))
-        d_seg, d_half, d_quarter = mf / mb - 1, mh / mb - 1, mq / mh - 1
-        speed_ok = abs(d_quarter) <= SPEED_TOL
-        if speed_ok:
-            value, speed_err, bracket = mq, abs(mq - mh), wq
-        else:
-            value = 2 * mq - mh
-            speed_err, bracket = abs(value - (8 * mq - 6 * mh + mb) / 3), 2 * wq + wh
-        bar = speed_err + bracket + abs(mf - mb)
-        out.append(dict(runs["base"], kind="converged", push_speed=0.0, lo=value - bar, hi=value + bar,
-                        status="converged in speed" if speed_ok else "extrapolated to v = 0", stages=math.nan,
-                        quasi_static=value, error_bar=bar, d_segments=d_seg, d_half_speed=d_half,
-                        d_quarter_speed=d_quarter, converged_segments=abs(d_seg) <= SEGMENTS_TOL,
-                        converged_speed=speed_ok))
-    return out
 
 
 def _onsets(results):

@@ -34,7 +34,7 @@ from ..integrators.base import RunOptions
 from ..params import RodChannel
 from ..rod3d import Rod3D, step_limit
 from ..simulate import simulate
-from .closed_forms import force_unit, length_unit
+from .si import case
 
 __all__ = ["push_rod", "push_model", "push", "inject", "inject_lanes", "lane_models", "lane", "locked", "extents", "units", "SEGMENTS_PER_WAVE"]
 
@@ -71,9 +71,9 @@ def push_rod(mu_L_over_ell, r_over_ell, mu, material: RodChannel | None = None) 
 
 
 def units(rod: RodChannel) -> tuple[float, float]:
-    """(F₀ [N], ℓ [m]) of `rod` (P8)."""
-    w = rod.rho * rod.g
-    return float(force_unit(rod.EI, w, rod.R)), float(length_unit(rod.EI, w, rod.R))
+    """(F₀ [N], ℓ [m]) of `rod` (P8; `jaxrod.lockup.si.case`)."""
+    c = case(rod)
+    return c["F0"], c["ell"]
 
 
 def _wave(rod: RodChannel) -> float:
