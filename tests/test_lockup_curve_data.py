@@ -46,7 +46,7 @@ def test_every_bracket_rests_on_steady_stages_on_either_side_of_the_bound():
 def test_the_soft_string_columns_are_the_chain_at_the_bound():
     summary = json.loads((DATA / "curve.json").read_text())
     for row in _rows("curve.csv"):
-        if row["quantity"] != "F_far_max":
+        if row["quantity"] != "F_far_max" or row["protocol"] != "staircase":
             continue
         rod = push_rod(float(row["L_over_ell"]), summary["r_over_ell"], 1.0)
         F0, ell = units(rod)
@@ -83,7 +83,7 @@ def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_
         return out
 
     rows = _rows("curve.csv")
-    runs = [typed(r) for r in rows if r["kind"] == "run"]
+    runs = [typed(r) for r in rows if r["kind"] == "run" and r["protocol"] == "staircase"]
     committed = [r for r in rows if r["kind"] == "converged"]
     again = lx.converged(runs, lx.SETTINGS[False])
     assert [(r["quantity"], r["muL_over_ell"]) for r in committed] == [
@@ -127,3 +127,26 @@ def test_a_single_step_to_the_far_load_slides_at_a_higher_entry_force_than_the_s
         assert f"{change:+.1f} %".replace("-", "−") == text
     assert "(+26 % and +29 %" in (ROOT / "docs" / "physics.md").read_text()
     assert "by +29 % at μL/ℓ = 1 when the far load comes in one step" in (ROOT / "README.md").read_text()
+
+
+def test_every_point_of_the_curve_has_its_single_step_row():
+    """`curve.csv` holds a `single_step` row at every point of the full setting (μL/ℓ = 0.5, 1, 1.5,
+    2, 3 and the lock-up length), read from its run's `lockup.json` (`jaxrod.experiments.lockup_path`):
+    its entry force against the staircase's at the same parameter — −0.8 % at 0.5 and 1.5, +0.8 %
+    at 3, +0.1 % at the lock-up length, −0.3 / +4.0 % at 2, +26 / +29 % at 1 — and on which side
+    of that parameter the protocol puts the quantity (a steady slide at ≤ f_c: `lo`, else `hi`)."""
+    rows = [r for r in _rows("curve.csv") if r["protocol"] == "single_step"]
+    assert {(r["quantity"], r["muL_over_ell"]) for r in rows} == {
+        ("F_far_max", x) for x in ("0.5", "1.0", "1.5", "2.0", "3.0")} | {("muL_lock", "nan")}
+    ratios = {}
+    for r in rows:
+        d = json.loads((DATA / r["source"]).read_text())
+        force = d["verdict"]["force"][1]
+        assert float(r["entry_force"]) == force and r["status"] == d["verdict"]["status"]
+        steady = d["verdict"]["status"] == "sliding" and force <= 6.0
+        assert (r["lo"] != "nan", r["hi"] != "nan") == (steady, not steady)
+        assert float(r["single_step_over_staircase"]) == pytest.approx(force / float(r["staircase_entry_force"]))
+        ratios.setdefault(r["muL_over_ell"], []).append(f"{100 * (float(r['single_step_over_staircase']) - 1):+.1f}")
+    assert {k: sorted(v) for k, v in ratios.items()} == {
+        "0.5": ["-0.8"], "1.0": ["+26.3", "+29.2"], "1.5": ["-0.8"], "2.0": ["+4.0", "-0.3"], "3.0": ["+0.8"],
+        "nan": ["+0.1"]}

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..output import write_csv
 from .lockup_convergence import FAR, LOCK, converged
+from .lockup_path import single_step_rows
 
 __all__ = ["lockup", "converged", "SETTINGS", "VARIANTS"]
 
@@ -203,7 +204,11 @@ def lockup(out, quick=False, progress=True, workers: int | None = None) -> dict:
     finally:
         if pool:
             pool.shutdown()
-    return _write(out, S, _results(S, out), time.time() - t)
+    wall = time.time() - t
+    if not jobs:  # nothing run: the cost quoted stays that of the last call that ran staircases
+        previous = os.path.join(out, "curve.json")
+        wall = json.load(open(previous))["wall_s_this_call"] if os.path.exists(previous) else wall
+    return _write(out, S, _results(S, out), wall)
 
 
 def _write(out, S, results, wall):
@@ -259,6 +264,7 @@ def _write(out, S, results, wall):
     onsets = _onsets(results)
     job_walls = {(r["L_over_ell"], r["per_wave"], r["speed"], r["wall_s"]): r["wall_s"] for r in results}  # per job
     curve += converged(curve, S)
+    curve += single_step_rows(out, S["f_c"], stages) if S.get("converge") else []  # the full setting's points
     cols = list(dict.fromkeys(k for r in curve for k in r))  # the converged rows' columns, empty in the runs'
     curve = [{k: r.get(k, math.nan) for k in cols} for r in curve]
     write_csv(os.path.join(out, "onsets.csv"), onsets)
@@ -267,7 +273,7 @@ def _write(out, S, results, wall):
     write_csv(os.path.join(out, "profiles.csv"), profiles)
     write_csv(os.path.join(out, "helix_laws.csv"), laws)
     summary = dict(model="rod3d", scheme="implicit", r_over_ell=R_OVER_ELL, damping=DAMPING, f_c=S["f_c"],
-                   settings=S, wall_s_this_call=wall, jobs_wall_s=list(job_walls.values()),
+                   settings=S, wall_s_this_call=wall,  # of the last call that ran staircases jobs_wall_s=list(job_walls.values()),
                    curve=curve, helix_laws=laws, onsets=onsets)
     with open(os.path.join(out, "curve.json"), "w") as fh:
         json.dump(summary, fh, indent=1, default=float)
@@ -315,9 +321,9 @@ def _figure(out, S, curve):
         name = f"{onset.replace('_', ' ')}, {law.replace('_', ' ')}"
         ax.plot(X, at, "-", color=c, lw=1.2, label=f"{name}: at f_in = {S['f_c']:g}")
         ax.plot(X, lim, ":", color=c, lw=1, label=f"{name}: f_in → ∞")
-    marks = {}
+    marks, path = {}, [r for r in curve if r["protocol"] != "staircase"]
     for row in curve:
-        if row["kind"] != "run":
+        if row["kind"] != "run" or row["protocol"] != "staircase":
             continue
         key = (row["segments_per_wave"], row["push_speed"])
         style = marks.setdefault(key, ("k", "C4", "C5", "C6", "C7")[len(marks) % 5])
@@ -343,10 +349,16 @@ def _figure(out, S, curve):
         if r["quantity"] == LOCK:
             ax.errorbar([r["quasi_static"]], [-0.06 * (len(marks) + 1)], xerr=[r["error_bar"]], fmt="o", color="C3",
                         ms=4, capsize=3)
+    for r in path:  # one step from the straight rod to the staircase's lower bound: which side of it
+        y = (-0.06 * (len(marks) + 2)) if r["quantity"] == LOCK else r["parameter"]
+        x = r["parameter"] if r["quantity"] == LOCK else r["muL_over_ell"] - 0.12
+        ax.plot(x, y, "^" if np.isfinite(r["lo"]) else "v", color="C9", ms=6, mfc="none")
+    if path:
+        ax.plot([], [], "^", color="C9", mfc="none", label="single step from straight: steady ≤ f_c (▲) or not (▼)")
     for key, style in marks.items():
         ax.plot([], [], "-", color=style, lw=4, label=f"3D rod, {key[0]} segments per wave, {1e3 * key[1]:g} mm/s")
     ax.axhline(0.0, color="0.6", lw=0.5)
-    ax.set(xlabel="μL/ℓ (bars below 0: the lock-up length μL_lock(f_c)/ℓ)", ylabel="F_far,max / F₀", ylim=(-0.35, 6),
+    ax.set(xlabel="μL/ℓ (bars below 0: the lock-up length μL_lock(f_c)/ℓ)", ylabel="F_far,max / F₀", ylim=(-0.42, 6),
            title=f"largest far load pushed at an entry force ≤ {S['f_c']:g} F₀ (bars: 3D rod's brackets)")
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
