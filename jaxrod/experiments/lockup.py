@@ -273,7 +273,7 @@ def _write(out, S, results, wall):
     write_csv(os.path.join(out, "profiles.csv"), profiles)
     write_csv(os.path.join(out, "helix_laws.csv"), laws)
     summary = dict(model="rod3d", scheme="implicit", r_over_ell=R_OVER_ELL, damping=DAMPING, f_c=S["f_c"],
-                   settings=S, wall_s_this_call=wall,  # of the last call that ran staircases jobs_wall_s=list(job_walls.values()),
+                   settings=S, wall_s_this_call=wall, jobs_wall_s=list(job_walls.values()),  # wall: the last call that ran staircases
                    curve=curve, helix_laws=laws, onsets=onsets)
     with open(os.path.join(out, "curve.json"), "w") as fh:
         json.dump(summary, fh, indent=1, default=float)
