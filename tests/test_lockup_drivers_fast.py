@@ -23,8 +23,8 @@ from jaxrod.experiments import lockup as lx
 from jaxrod.lockup import closed_forms as cf
 from jaxrod.lockup.laws import helix_against_laws
 from jaxrod.lockup.push import inject_lanes, push_rod, units
-from jaxrod.lockup.staircase import BELOW_START, BRACKETED, _next, staircase
-from jaxrod.lockup.verdict import SLIDING, Criterion, verdict
+from jaxrod.lockup.staircase import BELOW_START, BRACKETED, WIDE, _next, _stage_rule, staircase
+from jaxrod.lockup.verdict import LOCKED, SLIDING, Criterion, verdict
 
 jax.config.update("jax_enable_x64", True)
 
@@ -339,6 +339,46 @@ def test_next_goes_half_way_to_the_secants_crossing_within_its_bounds():
     assert _next([(1.1, 3.0), (1.1, 3.2)], 1.1, 6.0, 0.03) == pytest.approx(1.1 * 1.12, rel=1e-12)
     # a repeat at the same value (no slope to read) within 10 % of f_c: the least step
     assert _next([(1.1, 5.3), (1.1, 5.5)], 1.1, 6.0, 0.03) == pytest.approx(1.1 * 1.027, rel=1e-12)
+
+
+def test_the_stage_rule_on_synthetic_verdicts():
+    """`_stage_rule` on hand-made stages, f_c = 6: a steady slide at ≤ f_c is a lower bound and sets the
+    next parameter (`_next`); the stage that crosses f_c (or locks) is the upper bound and stops the
+    lane, bracketed when hi − lo ≤ rel·hi (1.0 → 1.029 at rel = 3 %: 2.8 %), wide when not (1.0 → 1.05:
+    4.8 %, and at rel = 4.5 %), below start without a lower bound; a transient stage is repeated
+    `repeats` times (None, the lane open), then stops the lane as transient; unresolved and failed
+    stop it with their status."""
+    def lane():
+        return dict(status="open", lo=None, hi=None, steady=[], repeats=0)
+
+    a = lane()
+    assert _stage_rule(a, 1.0, SLIDING, 5.0, 6.0, 0.03, 2) == pytest.approx(_next([(1.0, 5.0)], 1.0, 6.0, 0.03))
+    assert (a["lo"], a["status"], a["steady"]) == (1.0, "open", [(1.0, 5.0)])
+    assert _stage_rule(a, 1.029, SLIDING, 6.2, 6.0, 0.03, 2) is None
+    assert (a["lo"], a["hi"], a["status"]) == (1.0, 1.029, BRACKETED)
+    for rel in (0.03, 0.045):  # 1.0 → 1.05 is 4.76 % of 1.05
+        b = lane()
+        _stage_rule(b, 1.0, SLIDING, 5.9, 6.0, rel, 2)
+        assert _stage_rule(b, 1.05, LOCKED, float("nan"), 6.0, rel, 2) is None and b["status"] == WIDE
+    b = lane()
+    _stage_rule(b, 1.0, SLIDING, 5.9, 6.0, 0.05, 2)
+    _stage_rule(b, 1.05, LOCKED, float("nan"), 6.0, 0.05, 2)
+    assert b["status"] == BRACKETED
+    c = lane()
+    assert _stage_rule(c, 2.0, SLIDING, 6.5, 6.0, 0.03, 2) is None and (c["status"], c["hi"]) == (BELOW_START, 2.0)
+    d = lane()
+    for k in range(2):
+        assert _stage_rule(d, 1.0, "transient", 4.0, 6.0, 0.03, 2) is None
+        assert (d["status"], d["repeats"]) == ("open", k + 1)
+    assert _stage_rule(d, 1.0, "transient", 4.0, 6.0, 0.03, 2) is None and d["status"] == "transient"
+    # a steady stage after a repeat resets the count
+    e = lane()
+    _stage_rule(e, 1.0, "transient", 4.0, 6.0, 0.03, 2)
+    _stage_rule(e, 1.0, SLIDING, 4.0, 6.0, 0.03, 2)
+    assert e["repeats"] == 0 and e["lo"] == 1.0
+    for status in ("unresolved", "failed"):
+        f = lane()
+        assert _stage_rule(f, 1.0, status, 4.0, 6.0, 0.03, 2) is None and f["status"] == status and f["lo"] is None
 
 
 def test_a_staircase_brackets_both_lanes_and_records_every_stage():

@@ -71,6 +71,25 @@ def _next(history, p, f_c, rel, growth=0.12):
     return max(floor, p1 + min(0.5 * (target - p1), growth * p1))
 
 
+def _stage_rule(lane: dict, p: float, status: str, f_bar: float, f_c: float, rel: float, repeats: int):
+    """What a stage at the parameter `p` read as `status` (the verdict's) with the steady entry
+    force `f_bar` [F₀] does to its `lane` (a dict with `lo`, `hi`, `status`, `steady`, `repeats`;
+    updated in place), by the module docstring's rules. **Returns:** the next stage's parameter,
+    or None where the lane repeats its stage (`status` stays "open") or stops (`status` set)."""
+    if status == SLIDING and f_bar <= f_c:
+        lane.update(lo=p, repeats=0)
+        lane["steady"].append((p, f_bar))
+        return _next(lane["steady"], p, f_c, rel)
+    if (status == SLIDING and f_bar > f_c) or status == LOCKED:
+        lane["hi"] = p
+        lane["status"] = BELOW_START if lane["lo"] is None else (BRACKETED if (p - lane["lo"]) <= rel * p else WIDE)
+    elif status == TRANSIENT and lane["repeats"] < repeats:
+        lane["repeats"] += 1
+    else:
+        lane["status"] = status
+    return None
+
+
 def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=False, rel: float = 0.03,
               first_push: float = 0.4, stage_push: float = 0.15, max_stages: int = 12, repeats: int = 2,
               n: int | None = None, saves_per_stage: int = 41, criterion: Criterion = Criterion(),
@@ -145,26 +164,17 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
             lane["stages"].append(dict(stage=stage, parameter=p, status=V["status"], f_in=f_bar,
                                        segments_per_turn=V["segments_per_turn"], helix_angle=V["helix_angle"],
                                        helical=float(hel[0]), sinusoidal=float(sin[0]), reason=V["reason"]))
+            nxt = _stage_rule(lane, p, V["status"], f_bar, f_c, rel, repeats)
             if V["status"] == SLIDING and f_bar <= f_c:
-                lane.update(lo=p, repeats=0)
-                lane["steady"].append((p, f_bar))
                 lane["profiles"].append(dict(parameter=p, f_in=float(f_in[-1]), theta=obs["theta"][k, -1],
                                              wall_force=obs["normal_force"][k, -1],
                                              axial_force=obs["axial_force"][k, -1], mu=float(mu_now[k])))
-                nxt = _next(lane["steady"], p, f_c, rel)
-                if vary_mu[k]:
-                    mu_now[k] = nxt * ell / L
-                else:
-                    far_now[k] = nxt
-            elif (V["status"] == SLIDING and f_bar > f_c) or V["status"] == LOCKED:
-                lane["hi"] = p
-                lane["status"] = BELOW_START if lane["lo"] is None else (BRACKETED if (p - lane["lo"]) <= rel * p else WIDE)
-                pushing[k] = False
-            elif V["status"] == TRANSIENT and lane["repeats"] < repeats:
-                lane["repeats"] += 1
+            if nxt is None:
+                pushing[k] = lane["status"] == "open"
+            elif vary_mu[k]:
+                mu_now[k] = nxt * ell / L
             else:
-                lane["status"] = V["status"]
-                pushing[k] = False
+                far_now[k] = nxt
         if progress:
             done = ", ".join(f"{ln['status']}" for ln in lanes)
             print(f"  {label}stage {stage + 1}: {done}", flush=True)
