@@ -77,6 +77,30 @@ def test_the_euler_load_of_a_short_rod_is_the_discrete_elasticas(source):
     assert F_zero == pytest.approx(F_c, rel=2e-3)
 
 
+def test_a_uniform_twist_stores_and_returns_the_torsional_rigidity():
+    """A straight free rod (no wall, gravity or load), 10 segments, each segment turned about the
+    axis by k·φ more than the last: the twist energy is ½ (GJ/l̂) φ² over its 9 joints and the couple on
+    the last segment is GJ φ/l̂ about the axis, with GJ = G·πd⁴/32, G = E/2(1 + ν), from the rod's own
+    numbers (small φ: the couple's log map is exact to φ² relative); a torsional rigidity off by a
+    factor in energy and couple moves both by that factor (the forces-are-the-gradient test cannot
+    see it)."""
+    from jaxrod.rod3d.so3 import exp_so3
+
+    rod = jr.RodChannel.reference(0.0)
+    n, phi = 10, 1e-3
+    model = Rod3D(rod, n, channel=False, gravity=False, ends="free", control="force")
+    q, _ = model.initial_state(0.0)
+    turns = exp_so3(jnp.arange(n, dtype=float)[:, None] * phi * jnp.array([[1.0, 0.0, 0.0]]))  # about the axis x
+    Q = jnp.einsum("kij,kjl->kil", q.Q, turns)
+    GJ = float(rod.E) / (2 * (1 + float(rod.nu))) * np.pi * float(rod.d) ** 4 / 32
+    l0 = float(rod.L) / n
+    terms = model.elastic_terms(q.x, Q)
+    assert float(terms["twist"]) == pytest.approx(0.5 * GJ / l0 * phi**2 * (n - 1), rel=1e-6)
+    assert float(terms["bend"]) < 1e-12 * float(terms["twist"])
+    _, tau = model.generalized_forces(q.x, Q)
+    assert float(jnp.linalg.norm(tau[-1])) == pytest.approx(GJ * phi / l0, rel=1e-6)
+
+
 @pytest.mark.parametrize("hk_fraction, beta, gamma", [(1.0, 0.25, 0.0), (0.5, 0.25, 0.1), (1.0, 0.1, 0.3)])
 def test_the_implicit_kick_solves_newmarks_system(hk_fraction, beta, gamma):
     """`implicit_kick` against a dense solve of (M + βh²H + γh²H_d) Δ = hk (f, τ − ω × Jω) −
