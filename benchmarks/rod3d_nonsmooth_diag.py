@@ -5,7 +5,8 @@ subcommand prints one JSON line per result; the committed lines are in
 
     python benchmarks/rod3d_nonsmooth_diag.py e4 --scheme local --dt 2e-5 1e-5     # E4 C, mu 0.05 (~3-5 min a step)
     python benchmarks/rod3d_nonsmooth_diag.py e4 --scheme coupled --dt 5e-5        # (~7 min)
-    python benchmarks/rod3d_nonsmooth_diag.py e4 --gamma 0 --dt 1e-5 5e-6          # without the numerical damping
+    python benchmarks/rod3d_nonsmooth_diag.py e4 --gamma 0 --dt 5e-5 2e-5 1e-5     # without the numerical damping
+    python benchmarks/rod3d_nonsmooth_diag.py e4 --adaptive 1e-2 1e-9 --dt 5e-5    # error-controlled steps up to dt
     python benchmarks/rod3d_nonsmooth_diag.py e4-forcing --mu 0.05                 # its forcing phase explicit
     python benchmarks/rod3d_nonsmooth_diag.py e4-warmup --tau 0.02 0.1             # and its first tau s
     python benchmarks/rod3d_nonsmooth_diag.py wrinkle                              # the 61 N rod, seeded (~2 min)
@@ -50,18 +51,28 @@ def _scheme(name, damping=0.1):
     return Chosen
 
 
+def _adaptive(rtol, atol):
+    class Adaptive(jr.AdaptiveImplicitLeapfrog):
+        rtol: float = rtol
+        atol: float = atol
+
+    return Adaptive
+
+
 def e4(args):
     from jaxrod import perturbations
     from jaxrod.experiments.e4.rod3d import e4_point
 
-    SCHEMES["implicit"] = _scheme(args.scheme, args.gamma)
+    SCHEMES["implicit"] = _scheme(args.scheme, args.gamma) if args.adaptive is None else _adaptive(*args.adaptive)
     for c in (perturbations.RandomForce, perturbations.RandomVelocity):
         c.implicit_3d = True
     for dt in args.dt:
         Rod3D.implicit_step = dt
         t = time.perf_counter()
         row = e4_point("C", 0.05, 0, 500, t1=0.5, width=1.5)
-        print(json.dumps(dict(what="E4 C mu 0.05 dF* [N]", scheme=args.scheme, gamma=args.gamma, dt=dt, lo=row["lo"], hi=row["hi"],
+        scheme = args.scheme if args.adaptive is None else f"adaptive rtol {args.adaptive[0]:g} atol {args.adaptive[1]:g}"
+        print(json.dumps(dict(what="E4 C mu 0.05 dF* [N]", scheme=scheme, gamma=0.0 if args.adaptive else args.gamma,
+                              dt=dt, lo=row["lo"], hi=row["hi"],
                               result=row["result"], runs=row["runs"], wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
 
@@ -199,6 +210,8 @@ def main():
     p = sub.add_parser("e4")
     p.add_argument("--scheme", choices=["local", "coupled"], default="local")
     p.add_argument("--gamma", type=float, default=0.1)
+    p.add_argument("--adaptive", type=float, nargs=2, metavar=("RTOL", "ATOL"),
+                   help="the error-controlled scheme (gamma 0) with its largest step --dt")
     p.add_argument("--dt", type=float, nargs="+", default=[5e-5])
     p = sub.add_parser("e4-forcing")
     p.add_argument("--scheme", choices=["local", "coupled"], default="local")

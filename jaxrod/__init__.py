@@ -41,6 +41,7 @@ from .integrators import AbstractIntegrator as AbstractIntegrator
 from .integrators import Exact as Exact
 from .integrators import ProjectedLeapfrog as ProjectedLeapfrog
 from .integrators import ImplicitLeapfrog as ImplicitLeapfrog
+from .integrators import AdaptiveImplicitLeapfrog as AdaptiveImplicitLeapfrog
 from .integrators import ProjectedVerlet as ProjectedVerlet
 from .integrators import RunOptions as RunOptions
 from .integrators import SplitLinearFriction as SplitLinearFriction
@@ -71,7 +72,7 @@ from .sweeps import wilson_interval as wilson_interval
 __all__ = [
     "RESULTS", "AbstractFixedStep", "AbstractFriction", "AbstractIntegrator", "AbstractLoad",
     "AbstractModel", "ConstantLoad", "Coulomb", "DiffraxSmooth", "Exact", "FieldModel",
-    "GalerkinModel", "ImplicitLeapfrog", "ProjectedLeapfrog", "ProjectedVerlet", "RampLoad", "RandomForce", "RandomShape",
+    "AdaptiveImplicitLeapfrog", "GalerkinModel", "ImplicitLeapfrog", "ProjectedLeapfrog", "ProjectedVerlet", "RampLoad", "RandomForce", "RandomShape",
     "RandomVelocity", "Rod3D", "RodChannel", "RunOptions", "Scene", "SineVelocity", "SingleMode",
     "Solution", "SplitLinearFriction", "SweepResult", "SweepSpec", "SymplecticEuler", "Tanh",
     "UserState", "__version__", "boundary", "coulomb_prox", "critical_load", "critical_velocity",

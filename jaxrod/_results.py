@@ -20,6 +20,7 @@ class RESULTS:
     max_steps = 3
     invalid_input = 4
     inadequate = 5
+    tolerance = 6
 
     messages = {
         0: "successful",
@@ -29,6 +30,8 @@ class RESULTS:
         4: "an input value is outside its valid range",
         5: "the scheme is not adequate for this run (the 3D rod past the wall's wrinkling load with the implicit "
            "scheme's local friction pass: use ImplicitLeapfrog(coupled=True) or the explicit leapfrog)",
+        6: "the error-controlled step reached its smallest step with the error estimate above the tolerance "
+           "(loosen rtol/atol or lower dt_min)",
     }
 
     @classmethod

@@ -37,6 +37,10 @@ class Solution(eqx.Module):
     - `q_final`, `v_final`: the state at `t_stop`.
     - `result`: a [`jaxrod.RESULTS`][] code (int32 scalar).
     - `n_steps`: time steps (or, for the exact solution, slip phases) taken.
+    - `step_stats`: for an error-controlled scheme ([`jaxrod.AdaptiveImplicitLeapfrog`][]),
+      the steps it used: `rejected` (attempts rejected), `h_min`, `h_max` [s] (smallest and
+      largest accepted step), `forced` (steps taken at `dt_min` with the estimate above the
+      tolerance); `None` for a fixed step.
     """
 
     ts: Float[Array, " n_save"]
@@ -55,6 +59,7 @@ class Solution(eqx.Module):
     v_final: Float[Array, "..."]
     result: Int[Array, ""]
     n_steps: Int[Array, ""]
+    step_stats: dict | None = None
 
     @property
     def total_energy(self) -> Float[Array, " n_save"]:

@@ -9,6 +9,7 @@ from .explicit import SymplecticEuler as SymplecticEuler
 from .verlet import ProjectedVerlet as ProjectedVerlet
 from .leapfrog import ProjectedLeapfrog as ProjectedLeapfrog
 from .implicit import ImplicitLeapfrog as ImplicitLeapfrog
+from .adaptive import AdaptiveImplicitLeapfrog as AdaptiveImplicitLeapfrog
 
 if TYPE_CHECKING:  # imported on first use: diffrax takes 0.7 s to import (`__getattr__`)
     from .smooth import DiffraxSmooth as DiffraxSmooth

@@ -136,6 +136,9 @@ class RunState(eqx.Module):
     k: Array
     saves: Array
     amp_max: Array
+    control: Array | None = None
+    """An error-controlled scheme's step control (`jaxrod.integrators.adaptive.StepControl`);
+    `None` for a fixed step."""
 
     def finished(self, n_save: int):
         """Whether the run is over: stopped, or all `n_save − 1` save intervals done."""
@@ -150,6 +153,7 @@ class RunState(eqx.Module):
             dissipated=recs["dissipated"], work_in=recs["work_in"], observables=recs["observables"],
             buckled=self.buckled, t_buckle=self.t_buckle, t_stop=self.stop_time(t1, n_save), q_final=self.q,
             v_final=v_final, result=result, n_steps=self.steps,
+            step_stats=None if self.control is None else self.control.stats(),
         )
 
     def stop_time(self, t1: float, n_save: int):
@@ -249,13 +253,17 @@ class AbstractFixedStep(AbstractIntegrator):
             h_run = jnp.where(at_position, jnp.zeros_like(h), h_run)
             q, v, a, (lost, work), v_at = self.step(model, s.q, s.v, s.a, s.t, h_run, h_save=h,
                                                     at_position=at_position)
-        h = h_run
-        t = s.t + h
+        k = s.k + 1
+        return self._book(model, s, q, v, a, lost, work, s.t + h_run, k, k == m, frozen, options), v_at
+
+    def _book(self, model, s: RunState, q, v, a, lost, work, t, k, at_save, frozen, options: RunOptions) -> RunState:
+        """The run state after a step to (q, v, a) at `t` that removed `lost` and took in `work`:
+        the stop rules (buckling, non-finite, the stick test) and the save count (`at_save`: the
+        step ends a save interval; `k`: steps since the last save); a `frozen` run keeps its
+        bookkeeping."""
         amp, held = model.stop_measures(q, v, a, t)
         over = amp > options.threshold(model)
         first = over & ~s.buckled
-        k = s.k + 1
-        at_save = k == m
         blown = (over & options.stop_on_buckle) | ~jnp.isfinite(amp)
         # a held state under a constant load never moves again (for a scheme of which it is a
         # fixed point): freeze it at the step it is reached (`held` comes from the same
@@ -272,7 +280,8 @@ class AbstractFixedStep(AbstractIntegrator):
             steps=keep(s.steps, s.steps + 1), k=keep(s.k, jnp.where(at_save, 0, k)),
             saves=keep(s.saves, s.saves + at_save.astype(s.saves.dtype)),
             amp_max=keep(s.amp_max, jnp.where(at_save | stopped, jnp.maximum(s.amp_max, amp), s.amp_max)),
-        ), v_at
+            control=s.control,
+        )
 
     def integrate(self, model, q0, v0, t1, n_save, options=RunOptions(), check_step_limit=True):
         s0 = self.start(model, q0, v0, options)

@@ -25,7 +25,7 @@ from ..models.base import AbstractModel
 from ..params import RodChannel
 from ._checks import check_arguments
 from .._numerics import computed_once, float_leaf
-from . import components as c3, coupled, energy, hessian, measures, state
+from . import components as c3, coupled, energy, hessian, measures, state, step_error as _error
 from .contact import friction_pass, friction_table
 from .state import held_pattern, Rod3DForces, Rod3DPosition, Rod3DVelocity, at_rest, straight_state, wall_angle
 from .stiffness import frequency_bound
@@ -235,8 +235,7 @@ class Rod3D(AbstractModel):
         """Node velocities by f/m, spins by Euler's equations J ω̇ = τ − ω × Jω; held degrees of
         freedom keep their prescribed values."""
         J, W = c3.unpack(self.inertia), c3.unpack(v.w)
-        gyro = c3.gyroscopic(J, W)
-        tau = c3.unpack(a.tau)
+        gyro, tau = c3.gyroscopic(J, W), c3.unpack(a.tau)
         w = c3.pack(tuple(W[k] + h * (tau[k] - gyro[k]) / J[k] for k in range(3)))
         vn = v.v + h * a.f / self.mass[:, None]
         vn, w = self.constrain(vn, w)
@@ -245,6 +244,7 @@ class Rod3D(AbstractModel):
     implicit_kick = hessian.implicit_kick  # (q, v, a, hk, h, beta, gamma): `jaxrod.ImplicitLeapfrog`'s kick
     damping_loss = hessian.damping_loss  # the energy its numerical damping removes (`ImplicitLeapfrog.kick_loss`)
     coupled_kick = coupled.coupled_kick  # the kick and the wall friction on the step's operator (`ImplicitLeapfrog(coupled=True)`)
+    step_error = _error.step_error  # a step's local error estimate (`AdaptiveImplicitLeapfrog`)
 
     def drift(self, q: Rod3DPosition, v: Rod3DVelocity, h) -> Rod3DPosition:
         """x ← x + h v, Q ← exp(−h [ω]×) Q."""
