@@ -10,6 +10,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py e4-forcing --mu 0.05                 # its forcing phase explicit
     python benchmarks/rod3d_nonsmooth_diag.py e4-warmup --tau 0.02 0.1             # and its first tau s
     python benchmarks/rod3d_nonsmooth_diag.py wrinkle                              # the 61 N rod, seeded (~2 min)
+    python benchmarks/rod3d_nonsmooth_diag.py gamma-layer                          # gamma's effect against the step (~1 min)
     python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
     python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
 
@@ -204,6 +205,30 @@ def modes(args):
                               wrinkling_load=float(m.wrinkling_load()))), flush=True)
 
 
+def gamma_layer(args):
+    """E3's start on 12 segments (sine mode 6 at 0.02 m/s on the nodes, segments not turning, F⁰₆ + 5 N,
+    μ = 0.3) to 0.02 s: the largest lateral node displacement's difference from the explicit
+    leapfrog at 0.05 of its limit, for the implicit step with γ = 0, 0.05, 0.1 at 0.05 and 0.2 of
+    the explicit limit."""
+    from jaxrod.rod3d import step_limit
+
+    rod = jr.RodChannel.reference(0.3)
+    model = Rod3D(rod, 12, control="load", end_load=theory.reference_load(rod) + 5.0)
+    q0, v0 = model.initial_state(None, lateral_velocity=sine_velocity(model, 0.02))
+    lim = float(step_limit(model))
+    opts = jr.RunOptions(stop_on_buckle=False, stop_when_stuck=False)
+
+    def run(integ):
+        return jax.jit(lambda q, v: jr.simulate(model, integ, q, v, 0.02, n_save=5, options=opts, throw=False))(q0, v0)
+
+    ref = np.asarray(run(jr.ProjectedLeapfrog(0.05 * lim)).q.x[-1, :, 1:])
+    for f in (0.05, 0.2):
+        for g in (0.0, 0.05, 0.1):
+            d = float(np.abs(np.asarray(run(ImplicitLeapfrog(f * lim, gamma=g)).q.x[-1, :, 1:]) - ref).max())
+            print(json.dumps(dict(what="12-segment E3 start, 0.02 s: max lateral difference from explicit [m]",
+                                  dt=f * lim, gamma=g, difference=d, lateral_scale=float(np.abs(ref).max()))), flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -221,6 +246,7 @@ def main():
     p.add_argument("--mu", type=float, default=0.05)
     p.add_argument("--tau", type=float, nargs="+", default=[0.02, 0.1])
     sub.add_parser("wrinkle")
+    sub.add_parser("gamma-layer")
     p = sub.add_parser("vstar")
     p.add_argument("--scheme", choices=["local", "coupled"], default="coupled")
     p.add_argument("--gamma", type=float, default=0.1)
@@ -230,7 +256,8 @@ def main():
     p.add_argument("--n", type=int, default=500)
     p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
     args = ap.parse_args()
-    {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes}[args.cmd](args)
+    {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes,
+     "gamma-layer": gamma_layer}[args.cmd](args)
 
 
 if __name__ == "__main__":
