@@ -52,10 +52,10 @@ def _scheme(name, damping=0.1):
     return Chosen
 
 
-def _adaptive(rtol, atol):
+def _adaptive(r, a):
     class Adaptive(jr.AdaptiveImplicitLeapfrog):
-        rtol: float = rtol
-        atol: float = atol
+        rtol: float = r
+        atol: float = a
 
     return Adaptive
 
