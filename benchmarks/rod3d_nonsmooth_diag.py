@@ -11,6 +11,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py e4-warmup --tau 0.02 0.1             # and its first tau s
     python benchmarks/rod3d_nonsmooth_diag.py wrinkle                              # the 61 N rod, seeded (~2 min)
     python benchmarks/rod3d_nonsmooth_diag.py gamma-layer                          # gamma's effect against the step (~1 min)
+    python benchmarks/rod3d_nonsmooth_diag.py e4-gates --gamma 0 --dt 2e-5         # E4 B and C, mu 0.05/0.3/1, 3 realizations
     python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
     python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
 
@@ -205,6 +206,39 @@ def modes(args):
                               wrinkling_load=float(m.wrinkling_load()))), flush=True)
 
 
+def e4_gates(args):
+    """E4 points under the random perturbations with the implicit scheme forced at `--dt` and
+    `--gamma` (local pass), each against the explicit point of results/paper/e4/rod3d_n500.csv at
+    the same horizon (0.5 s): one line per point, with the explicit bracket and the midpoints'
+    relative difference."""
+    import csv
+
+    from jaxrod import perturbations
+    from jaxrod.experiments.e4.rod3d import e4_point
+
+    ref = {(r["case"], float(r["mu"]), int(r["realization"])): r
+           for r in csv.DictReader(open("results/paper/e4/rod3d_n500.csv"))
+           if float(r["t1"]) == 0.5 and r["result"] == "0"}
+    SCHEMES["implicit"] = _scheme("local", args.gamma)
+    for c in (perturbations.RandomForce, perturbations.RandomVelocity):
+        c.implicit_3d = True
+    Rod3D.implicit_step = args.dt
+    for case in args.cases:
+        for mu in args.mu:
+            for k in args.realizations:
+                r = ref.get((case, mu, k))
+                if r is None:
+                    continue
+                t = time.perf_counter()
+                row = e4_point(case, mu, k, 500, t1=0.5)
+                mid, ref_mid = 0.5 * (row["lo"] + row["hi"]), 0.5 * (float(r["lo"]) + float(r["hi"]))
+                print(json.dumps(dict(what=f"E4 {case} mu {mu:g} realization {k} dF* [N], implicit forced", gamma=args.gamma,
+                                      dt=args.dt, lo=row["lo"], hi=row["hi"], result=row["result"], runs=row["runs"],
+                                      explicit_lo=float(r["lo"]), explicit_hi=float(r["hi"]),
+                                      explicit_commit=r["commit"], midpoint_difference=mid / ref_mid - 1,
+                                      wall_s=round(time.perf_counter() - t, 1))), flush=True)
+
+
 def gamma_layer(args):
     """E3's start on 12 segments (sine mode 6 at 0.02 m/s on the nodes, segments not turning, F⁰₆ + 5 N,
     μ = 0.3) to 0.02 s: the largest lateral node displacement's difference from the explicit
@@ -247,6 +281,12 @@ def main():
     p.add_argument("--tau", type=float, nargs="+", default=[0.02, 0.1])
     sub.add_parser("wrinkle")
     sub.add_parser("gamma-layer")
+    p = sub.add_parser("e4-gates")
+    p.add_argument("--gamma", type=float, default=0.0)
+    p.add_argument("--dt", type=float, default=2e-5)
+    p.add_argument("--cases", nargs="+", default=["C", "B"])
+    p.add_argument("--mu", type=float, nargs="+", default=[0.05, 0.3, 1.0])
+    p.add_argument("--realizations", type=int, nargs="+", default=[0, 1, 2])
     p = sub.add_parser("vstar")
     p.add_argument("--scheme", choices=["local", "coupled"], default="coupled")
     p.add_argument("--gamma", type=float, default=0.1)
@@ -257,7 +297,7 @@ def main():
     p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
     args = ap.parse_args()
     {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes,
-     "gamma-layer": gamma_layer}[args.cmd](args)
+     "gamma-layer": gamma_layer, "e4-gates": e4_gates}[args.cmd](args)
 
 
 if __name__ == "__main__":
