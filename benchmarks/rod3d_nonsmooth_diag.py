@@ -161,11 +161,12 @@ def vstar(args):
     from jaxrod import boundary as bd
 
     SCHEMES["implicit"] = _scheme(args.scheme, args.gamma)
+    Rod3D.implicit_step = args.dt
     rod = jr.RodChannel.reference(0.3)
     for dF in args.dF:
         t = time.perf_counter()
         res, _ = bd.boundary_curve(rod, [dF], model="rod3d", n=args.n, bracket=(1e-5, 2.0), rtol=3e-3, sensitivities=())
-        print(json.dumps(dict(what="E3 v0* [mm/s]", scheme=args.scheme, gamma=args.gamma, n=args.n, dF=dF,
+        print(json.dumps(dict(what="E3 v0* [mm/s]", scheme=args.scheme, gamma=args.gamma, dt=args.dt, n=args.n, dF=dF,
                               lo=1e3 * float(res.lo[0]), hi=1e3 * float(res.hi[0]), runs=int(res.evaluations[0]),
                               result=int(res.result[0]), wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
@@ -290,6 +291,7 @@ def main():
     p = sub.add_parser("vstar")
     p.add_argument("--scheme", choices=["local", "coupled"], default="coupled")
     p.add_argument("--gamma", type=float, default=0.1)
+    p.add_argument("--dt", type=float, default=5e-5)
     p.add_argument("--n", type=int, default=60)
     p.add_argument("--dF", type=float, nargs="+", default=[5.0, 20.0])
     p = sub.add_parser("modes")
