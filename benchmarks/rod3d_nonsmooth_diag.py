@@ -12,6 +12,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py wrinkle                              # the 61 N rod, seeded (~2 min)
     python benchmarks/rod3d_nonsmooth_diag.py gamma-layer                          # gamma's effect against the step (~1 min)
     python benchmarks/rod3d_nonsmooth_diag.py e4-gates --gamma 0 --dt 2e-5         # E4 B and C, mu 0.05/0.3/1, 3 realizations
+    python benchmarks/rod3d_nonsmooth_diag.py adaptive-steps --n 60 500            # the error-controlled step on E4 C
     python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
     python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
 
@@ -240,6 +241,32 @@ def e4_gates(args):
                                       wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
 
+def adaptive_steps(args):
+    """The steps `AdaptiveImplicitLeapfrog` (γ = 0, largest step 5e-5 s) takes on E4 C's scene
+    (μ = 0.05, ΔF = 1.39 N, random position ±2 N/m for 1 ms, realization 0) over `--t1` s, at
+    `--n` segments and the tolerances `--rtol`, `--atol`: steps, rejections, smallest and largest
+    step, against the explicit limit."""
+    from jaxrod import perturbations
+    from jaxrod.rod3d import step_limit
+
+    SCHEMES["implicit"] = _adaptive(args.rtol, args.atol)
+    for c in (perturbations.RandomForce, perturbations.RandomVelocity):
+        c.implicit_3d = True
+    Rod3D.implicit_step = 5e-5
+    rod = jr.RodChannel.reference(0.05)
+    key = jax.random.fold_in(jax.random.key(0), 0)
+    for n in args.n:
+        scene = jr.Scene(rod, 1.39, perturbation=jr.RandomForce(2.0, key), kind="rod3d", n=n)
+        t = time.perf_counter()
+        sol = scene.run(t1=args.t1, n_save=11, save_state=False)
+        limit = float(step_limit(scene.model()))
+        print(json.dumps(dict(what="adaptive steps on E4 C's scene", n=n, t1=args.t1, rtol=args.rtol, atol=args.atol,
+                              result=int(sol.result), steps=int(sol.n_steps),
+                              **{k: float(v) for k, v in sol.step_stats.items()}, explicit_limit=limit,
+                              mean_step_over_limit=args.t1 / int(sol.n_steps) / limit,
+                              wall_s=round(time.perf_counter() - t, 1))), flush=True)
+
+
 def gamma_layer(args):
     """E3's start on 12 segments (sine mode 6 at 0.02 m/s on the nodes, segments not turning, F⁰₆ + 5 N,
     μ = 0.3) to 0.02 s: the largest lateral node displacement's difference from the explicit
@@ -282,6 +309,11 @@ def main():
     p.add_argument("--tau", type=float, nargs="+", default=[0.02, 0.1])
     sub.add_parser("wrinkle")
     sub.add_parser("gamma-layer")
+    p = sub.add_parser("adaptive-steps")
+    p.add_argument("--n", type=int, nargs="+", default=[60, 500])
+    p.add_argument("--t1", type=float, default=0.05)
+    p.add_argument("--rtol", type=float, default=1e-2)
+    p.add_argument("--atol", type=float, default=1e-9)
     p = sub.add_parser("e4-gates")
     p.add_argument("--gamma", type=float, default=0.0)
     p.add_argument("--dt", type=float, default=2e-5)
@@ -299,7 +331,7 @@ def main():
     p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
     args = ap.parse_args()
     {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes,
-     "gamma-layer": gamma_layer, "e4-gates": e4_gates}[args.cmd](args)
+     "gamma-layer": gamma_layer, "e4-gates": e4_gates, "adaptive-steps": adaptive_steps}[args.cmd](args)
 
 
 if __name__ == "__main__":
