@@ -210,7 +210,7 @@ def modes(args):
 
 def e4_gates(args):
     """E4 points under the random perturbations with the implicit scheme forced at `--dt` and
-    `--gamma` (local pass), each against the explicit point of results/paper/e4/rod3d_n500.csv at
+    `--gamma` (`--scheme`: the local friction pass or the coupled solve), each against the explicit point of results/paper/e4/rod3d_n500.csv at
     the same horizon (0.5 s): one line per point, with the explicit bracket and the midpoints'
     relative difference."""
     import csv
@@ -221,7 +221,7 @@ def e4_gates(args):
     ref = {(r["case"], float(r["mu"]), int(r["realization"])): r
            for r in csv.DictReader(open("results/paper/e4/rod3d_n500.csv"))
            if float(r["t1"]) == 0.5 and r["result"] == "0"}
-    SCHEMES["implicit"] = _scheme("local", args.gamma)
+    SCHEMES["implicit"] = _scheme(args.scheme, args.gamma)
     for c in (perturbations.RandomForce, perturbations.RandomVelocity):
         c.implicit_3d = True
     Rod3D.implicit_step = args.dt
@@ -234,7 +234,8 @@ def e4_gates(args):
                 t = time.perf_counter()
                 row = e4_point(case, mu, k, 500, t1=0.5)
                 mid, ref_mid = 0.5 * (row["lo"] + row["hi"]), 0.5 * (float(r["lo"]) + float(r["hi"]))
-                print(json.dumps(dict(what=f"E4 {case} mu {mu:g} realization {k} dF* [N], implicit forced", gamma=args.gamma,
+                print(json.dumps(dict(what=f"E4 {case} mu {mu:g} realization {k} dF* [N], implicit forced",
+                                      scheme=args.scheme, gamma=args.gamma,
                                       dt=args.dt, lo=row["lo"], hi=row["hi"], result=row["result"], runs=row["runs"],
                                       explicit_lo=float(r["lo"]), explicit_hi=float(r["hi"]),
                                       explicit_commit=r["commit"], midpoint_difference=mid / ref_mid - 1,
@@ -315,6 +316,7 @@ def main():
     p.add_argument("--rtol", type=float, default=1e-2)
     p.add_argument("--atol", type=float, default=1e-9)
     p = sub.add_parser("e4-gates")
+    p.add_argument("--scheme", choices=["local", "coupled"], default="local")
     p.add_argument("--gamma", type=float, default=0.0)
     p.add_argument("--dt", type=float, default=2e-5)
     p.add_argument("--cases", nargs="+", default=["C", "B"])
