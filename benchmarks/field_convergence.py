@@ -22,6 +22,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
+from jaxrod.boundary.roots import bisection  # noqa: E402
 
 DFS = jnp.array([1.0, 5.0, 20.0, 60.0])
 T1 = 2.0
@@ -40,8 +41,8 @@ def critical_v0(n, dt, dFs, mu=0.3, operator="fd", n_iter=26):
             sol = jr.simulate(model, integ, q0, w0, T1, n_save=3, options=opts, throw=False)
             return sol.buckled
 
-        lo, hi = jr.search.bisect(buckles, 1e-4, 1.0, n_iter)
-        return 0.5 * (lo + hi), hi - lo
+        r = bisection(buckles, 1e-4, 1.0, rtol=0.0, max_iter=n_iter)
+        return 0.5 * (r.lo + r.hi), r.hi - r.lo
 
     return jax.jit(jax.vmap(one))(dFs)
 

@@ -37,6 +37,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 import jaxrod as jr  # noqa: E402
+from jaxrod.boundary.roots import bisection  # noqa: E402
 
 from _common import RESULTS as OUT, run_or_replot, load_rows, timed, write_csv  # noqa: E402
 
@@ -61,9 +62,10 @@ def field_vcrit(n, integ, n_iter, repeats):
         q0, w0 = jr.SineVelocity(v0, 6).initial_state(model)
         return jr.simulate(model, integ, q0, w0, T1, n_save=3, options=opts, throw=False).buckled
 
-    f = jax.jit(lambda lo, hi: jr.search.bisect(buckles, lo, hi, n_iter))
+    f = jax.jit(lambda lo, hi: bisection(buckles, lo, hi, rtol=0.0, max_iter=n_iter))
     lab = jax.jit(jax.vmap(buckles))(jnp.asarray(BRACKET))
-    (lo, hi), first, best = timed(f, *BRACKET, repeats=repeats)
+    r, first, best = timed(f, *BRACKET, repeats=repeats)
+    lo, hi = r.lo, r.hi
     if bool(lab[0]) or not bool(lab[1]):
         return float("nan"), first, best, f"bracket labels {np.asarray(lab).tolist()}"
     return float(jnp.sqrt(lo * hi)), first, best, ""

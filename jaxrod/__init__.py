@@ -24,7 +24,6 @@ from . import modal as modal
 from . import perturbations as perturbations
 from . import rod3d as rod3d
 from . import scene as scene
-from . import search as search
 from . import stability_map as stability_map
 from . import theory as theory
 from . import worst_case as worst_case
@@ -76,7 +75,7 @@ __all__ = [
     "RandomVelocity", "Rod3D", "RodChannel", "RunOptions", "Scene", "SineVelocity", "SingleMode",
     "Solution", "SplitLinearFriction", "SweepResult", "SweepSpec", "SymplecticEuler", "Tanh",
     "UserState", "__version__", "boundary", "coulomb_prox", "critical_load", "critical_velocity",
-    "distributed", "exact_solution", "modal", "perturbations", "rod3d", "scene", "search", "simulate",
+    "distributed", "exact_solution", "modal", "perturbations", "rod3d", "scene", "simulate",
     "stability_map", "sweep", "theory", "wilson_interval", "worst_case",
 ]
 

@@ -20,7 +20,6 @@ noise.
 from __future__ import annotations
 
 import abc
-import warnings
 from typing import ClassVar
 
 import equinox as eqx
@@ -136,11 +135,6 @@ class SineVelocity(AbstractPerturbation):
 
     amplitude: Float[Array, ""] = eqx.field(converter=_f)
     mode: Float[Array, ""] = eqx.field(converter=_f, default=6.0)
-
-    @property
-    def v0(self):
-        warnings.warn("SineVelocity.v0 is deprecated: use SineVelocity.amplitude.", DeprecationWarning, stacklevel=2)
-        return self.amplitude
 
     @classmethod
     def from_settings(cls, amplitude, mode, key, duration):

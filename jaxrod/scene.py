@@ -110,10 +110,6 @@ class Scene(eqx.Module):
                 "dF): the size is a static setting."
             ) from None
 
-    def nodes(self) -> int:
-        """The field model's nodes: `size()` of a field scene (deprecated name)."""
-        return self.size()
-
     def _grid(self):
         """The field model and integrator on which a field perturbation is drawn before it is
         projected onto a model that takes none (the single mode)."""

@@ -1,4 +1,4 @@
-"""The 3D rod's boundary search (`jaxrod.experiments.e3_rod3d`): the bracketing bisection
+"""The 3D rod's boundary search (`jaxrod.experiments.e3.rod3d`): the bracketing bisection
 against labels with a known boundary, and the replay of recorded runs."""
 
 import math

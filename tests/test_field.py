@@ -9,6 +9,7 @@ import pytest
 
 import jaxrod as jr
 from jaxrod import theory as th
+from jaxrod.boundary.roots import bisection
 
 ROD = jr.RodChannel.reference(mu=0.3)
 
@@ -201,8 +202,8 @@ def test_critical_velocity_converges_in_n_and_dt():
             return jr.simulate(model, jr.ProjectedVerlet(dt), q0, w0, 1.0, n_save=3,
                                options=jr.RunOptions(save_state=False), throw=False).buckled
 
-        lo, hi = jax.jit(lambda: jr.search.bisect(buckles, 5e-3, 0.1, 22))()
-        return float(0.5 * (lo + hi))
+        r = jax.jit(lambda: bisection(buckles, 5e-3, 0.1, rtol=0.0, max_iter=22))()
+        return float(0.5 * (r.lo + r.hi))
 
     table = {(n, f): v_star(n, f) for n, f in [(32, 0.4), (64, 0.4), (128, 0.4), (64, 0.2), (64, 0.1)]}
     print("n, dt/limit -> v0* [mm/s]:", {k: round(1e3 * v, 4) for k, v in table.items()})

@@ -630,15 +630,15 @@ def test_a_step_past_the_limit_is_flagged_unless_the_caller_checked_it():
     assert codes == [int(jr.RESULTS.step_limit), int(jr.RESULTS.successful)]
 
 
-def test_the_deprecated_bisect_halves_in_log_space_unless_told_otherwise():
-    """`jaxrod.search.bisect` (deprecated, warns): one halving of [0.1, 10] takes the geometric
+def test_bisection_halves_in_log_space_unless_told_otherwise():
+    """`jaxrod.boundary.roots.bisection` on a label: one halving of [0.1, 10] takes the geometric
     midpoint 1 by default and the arithmetic one 5.05 with `geometric=False`."""
-    with pytest.warns(DeprecationWarning):
-        lo, hi = jr.search.bisect(lambda x: x > 0.5, 0.1, 10.0, 1)
-    assert (float(lo), float(hi)) == (0.1, pytest.approx(1.0, rel=1e-15))
-    with pytest.warns(DeprecationWarning):
-        lo, hi = jr.search.bisect(lambda x: x > 0.5, 0.1, 10.0, 1, geometric=False)
-    assert (float(lo), float(hi)) == (0.1, pytest.approx(5.05, rel=1e-15))
+    from jaxrod.boundary.roots import bisection
+
+    r = bisection(lambda x: x > 0.5, 0.1, 10.0, rtol=0.0, max_iter=1)
+    assert (float(r.lo), float(r.hi)) == (0.1, pytest.approx(1.0, rel=1e-15))
+    r = bisection(lambda x: x > 0.5, 0.1, 10.0, rtol=0.0, max_iter=1, geometric=False)
+    assert (float(r.lo), float(r.hi)) == (0.1, pytest.approx(5.05, rel=1e-15))
 
 
 def test_a_ramp_load_by_hand_before_during_and_after_its_ramp():

@@ -7,6 +7,7 @@ import jax
 import jax.numpy as jnp
 
 import jaxrod as jr
+from jaxrod.boundary.roots import bisection
 
 ROD = jr.RodChannel.reference(mu=0.3)
 
@@ -33,5 +34,5 @@ def field_vcrit(n, dF, integ, t1=0.5, n_iter=30, bracket=(1e-4, 0.2)):
         q0, w0 = jr.SineVelocity(v0, 6).initial_state(model)
         return jr.simulate(model, integ, q0, w0, t1, n_save=3, options=opts, throw=False).buckled
 
-    lo, hi = jax.jit(lambda: jr.search.bisect(buckles, *bracket, n_iter))()
-    return float(jnp.sqrt(lo * hi))
+    r = jax.jit(lambda: bisection(buckles, *bracket, rtol=0.0, max_iter=n_iter))()
+    return float(jnp.sqrt(r.lo * r.hi))

@@ -18,6 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxrod as jr
+from jaxrod.boundary.roots import bisection
 
 from .common import mode_at, scales
 
@@ -67,8 +68,8 @@ def entry_creep(quick):
                 sol = jr.simulate(m, integ, 0.0, x * vc, T, n_save=2, throw=False)
                 return ~(jnp.abs(sol.q_final) <= a)
 
-            lo, hi = jr.search.bisect(buckles, 1e-4, 3.6, 28 if quick else 40)
-            return jnp.sqrt(lo * hi)
+            r = bisection(buckles, 1e-4, 3.6, rtol=0.0, max_iter=28 if quick else 40)
+            return jnp.sqrt(r.lo * r.hi)
 
         t0 = time.perf_counter()
         r = np.asarray(jax.jit(jax.vmap(root))(jnp.asarray(epss)))

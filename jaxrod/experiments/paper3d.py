@@ -8,7 +8,7 @@ Every search is label bisection of the 3D rod's runs (a run stops at its label: 
 the buckling threshold) to a relative bracket of 1 %, started from the field model's answer:
 
 - **E3**: v₀*(ΔF) of the sine mode 6, μ = 0.3, a bracket ±4 % around the field model's v₀*,
-  widened until two runs hold it (`e3_rod3d.boundary_3d`); the exponent of v₀* ∝ ΔF^p by least
+  widened until two runs hold it (`e3.rod3d.boundary_3d`); the exponent of v₀* ∝ ΔF^p by least
   squares in log–log over all the loads, fixed before any run, beside the paper's −0.77.
 - **E4**: ΔF*(μ) of the sine 15 mm/s (A), of random velocities ±15 mm/s (B) and of random
   positions (C: forces ±2 N/m for 1 ms; realization r: key `fold_in(key(0), r)`), in a bracket

@@ -54,7 +54,7 @@ rod = RodChannel.reference(0.3)
 for dF in [float(x) for x in sys.argv[1:]]:
     r, _ = critical_velocity(rod, dF, model="field", rtol=1e-4, sensitivities=())
     base = Scene(rod, dF, SineVelocity(1e-3), kind="field")
-    n, dt = base.nodes(), base.step()
+    n, dt = base.size(), base.step()
     out = []
     for cls in (FieldNL, FieldNLN):
         def lab(v0):
