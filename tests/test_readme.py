@@ -1,4 +1,4 @@
-"""README.md and benchmarks/README.md are references that stay true: their links resolve, their
+"""README.md, docs/status.md and benchmarks/README.md are references that stay true: their links resolve, their
 length stays within its limit, and the numbers they copy from a results file or a script are
 checked against that source.
 
@@ -36,7 +36,8 @@ import unicodedata
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-LIMITS = {"README.md": 350, "benchmarks/README.md": 445}  # + the implicit 3D step's and the fusion emitters' sections
+LIMITS = {"README.md": 150, "docs/status.md": 240, "benchmarks/README.md": 445}  # README: the front door; the
+# measurements behind it in docs/status.md
 FILES = sorted(LIMITS)
 
 FRAME = re.compile(r"<!-- (include|generated): (.+?) -->\n(.*?)<!-- end \1 -->", re.S)
@@ -86,8 +87,9 @@ def _frames(name: str):
 
 
 def test_frames_exist():
-    """The README frames the speed headline, the mutation score and the paper's table."""
-    readme = {(kind, spec.split("|")[0].split()[0]) for kind, spec, _ in _frames("README.md")}
+    """docs/status.md (the measurements behind the README) frames the speed headline, the mutation
+    score and the paper's table."""
+    readme = {(kind, spec.split("|")[0].split()[0]) for kind, spec, _ in _frames("docs/status.md")}
     assert ("include", "benchmarks/results/first_answer/first_answer.md") in readme
     assert ("include", "results/mutation/report.md") in readme
     assert ("generated", "studies/paper/table.py") in readme
