@@ -114,9 +114,7 @@ def _run(names, out):
                     fh.write(text)
                 failed = re.findall(r"^FAILED (\S+)(?: - (.*))?$", proc.stdout, re.M)
                 if failed:
-                    test, msg = failed[0]
-                    kind = "assertion" if (msg or "").startswith("AssertionError") else "exception"
-                    verdict = f"killed by `{test}` ({kind}: {(msg or '').strip()[:70]!r})"
+                    verdict = f"killed by `{failed[0][0]}`"
                 elif proc.returncode == 0:
                     verdict = "**survived**"
                 else:
