@@ -19,10 +19,10 @@ from .models.field import DEFAULT_NODES, FieldModel, default_nodes
 from .models.galerkin import DEFAULT_MODES
 from .params import RodChannel
 from .perturbations import AbstractPerturbation, SineVelocity
-from .registry import make_perturbation, model_class, model_names, perturbation_names
+from .registry import model_class, model_names, perturbation_names
 from .simulate import simulate
 
-__all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1", "make_perturbation",
+__all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1",
            "default_nodes", "scheme_for"]
 
 # the built-in names (`jaxrod.registry.model_names()` and `perturbation_names()` include any registered since)

@@ -128,7 +128,7 @@ def test_critical_load_of_a_random_position_scene_splits_its_labels():
     by plain runs of the scene, independent of the search: 2 % below it the rod sticks (stable),
     2 % above it buckles (measured ΔF* = 8.46 N, in 17 runs)."""
     key = jax.random.key(4)
-    pert = jr.scene.make_perturbation("random-position", 2.0, 6, key)
+    pert = jr.registry.make_perturbation("random-position", 2.0, 6, key)
     dt = jr.scene.Scene(ROD, 100.0, pert, "field", n=48).step()
     res, _ = bd.critical_load(ROD, 2.0, model="field", perturbation="random-position", n=48, dt=dt, key=key,
                               sensitivities=())

@@ -72,7 +72,7 @@ def test_worst_case_sine_norm_is_the_critical_rms_of_the_scenes_own_sine(worst):
     sine perturbation (`make_perturbation`) of amplitude norm_sine/√(9/16) is critical: 1 %
     above it the rod buckles, 1 % below it does not."""
     from jaxrod import boundary as bd
-    from jaxrod.scene import make_perturbation
+    from jaxrod.registry import make_perturbation
 
     rod, r = worst
     dt = jr.Scene(rod, 0.0, kind="field", n=8).step()

@@ -270,7 +270,7 @@ def test_a_load_search_without_n_takes_the_nodes_its_perturbation_needs_at_the_l
     perturbation searched — for a random velocity the nodes of the scene's noise grid, more than a
     sine's — and its step. (The search is replaced by a stand-in that stops at its first scene.)"""
     from jaxrod.boundary import search as S
-    from jaxrod.scene import make_perturbation
+    from jaxrod.registry import make_perturbation
 
     def stand_in(scene_of, *args, **kwargs):
         raise _Seen(scene_of(jnp.asarray(0.0)))

@@ -76,7 +76,7 @@ def test_critical_load_of_a_random_perturbation_converges_in_n(kind, amplitude, 
         roots.append(float(r.root))
     print(kind, f"dF* at n = {ns}:", roots)
     assert abs(roots[1] / roots[0] - 1) < 0.02
-    assert jr.scene.Scene(ROD, 5.0, jr.scene.make_perturbation(kind, amplitude), "field").size() >= (
+    assert jr.scene.Scene(ROD, 5.0, jr.registry.make_perturbation(kind, amplitude), "field").size() >= (
         499 if kind == "random-velocity" else 128)
 
 

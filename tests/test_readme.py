@@ -228,3 +228,16 @@ if __name__ == "__main__":
         update()
     else:
         sys.exit(pytest.main([__file__, "-q", "-p", "no:xdist"]))
+
+
+def test_the_readme_code_runs(capsys):
+    """The README's Python blocks (the example, then the API sketch, which continues it) run as
+    written, and the example prints what the README says it prints."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"^```python\n(.*?)^```", text, re.S | re.M)
+    assert len(blocks) == 2
+    scope: dict = {}
+    exec(compile("\n".join(blocks), "README.md", "exec"), scope)  # noqa: S102
+    out = capsys.readouterr().out
+    assert "critical lateral speed: 28.47 mm/s" in out and "prints a critical lateral speed of 28.47 mm/s" in text
+    assert int(scope["sol"].result) == 0 and float(scope["root"].root) > 0

@@ -36,7 +36,7 @@ def test_rod_indicator_of_one_mode_is_the_exact_amplitude():
     from jaxrod.models import SingleMode
     from jaxrod.models.single_mode import exact_solution
 
-    scene = jr.scene.Scene(ROD, 5.0, jr.scene.make_perturbation("sine", 0.03), kind="mode")
+    scene = jr.scene.Scene(ROD, 5.0, jr.registry.make_perturbation("sine", 0.03), kind="mode")
     m = SingleMode.from_rod(ROD, 6, F=scene.F)
     q0, v0 = scene.initial_state()
     A = exact_solution(q0, v0, m.k, m.f_s, m.f_d, 0.2)[0]
