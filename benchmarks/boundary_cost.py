@@ -99,7 +99,8 @@ def wall_time(rows):
 
 
 def e4(rows):
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     mus = np.geomspace(0.05, 0.9, 8)
     R, n, amp = 8, 128, 15e-3

@@ -49,7 +49,8 @@ import jaxrod as jr  # noqa: E402
 from jaxrod import boundary as bd  # noqa: E402
 from jaxrod.modal import modal_spectrum  # noqa: E402
 from jaxrod.output import write_csv  # noqa: E402
-from jaxrod.scene import Scene, make_perturbation  # noqa: E402
+from jaxrod.registry import make_perturbation  # noqa: E402
+from jaxrod.scene import Scene  # noqa: E402
 from jaxrod.stability_map import fit_power_law  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -189,7 +189,8 @@ def test_static_friction_above_dynamic_is_kept_by_the_search():
     Static friction holds the resting rod a little longer: its ΔF* lies above the μ_s = μ_d one,
     and it is a label boundary of the rod it was asked about (3 % below straight, 3 % above
     buckled at the search's horizon)."""
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     equal = jr.RodChannel.reference(0.3)
     sticky = equal.with_friction(0.6, 0.3)

@@ -9,7 +9,8 @@ import pytest
 
 import jaxrod as jr
 from jaxrod.cli import main
-from jaxrod.scene import Scene, make_perturbation
+from jaxrod.registry import make_perturbation
+from jaxrod.scene import Scene
 
 EXPECTED_KEYS = {"F0cr_continuous", "omega0", "critical_mode", "F0_mode", "k", "f", "Adot_cr", "v_cr", "A_cr"}
 

@@ -422,7 +422,8 @@ def test_dominant_modes_at_repeats_each_realization_of_the_search():
     entry is the one that buckles."""
     from jaxrod.experiments.convergence import dominant_modes_at
     from jaxrod.modal import dominant_mode
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     mus, dFs, n, t1 = np.array([0.3, 0.9]), np.array([[5.0, 150.0], [5.0, 300.0]]), 8, 0.3
     modes, buckled = dominant_modes_at("random-position", 2.0, mus, dFs, n, 2, seed=5, t1=t1)
@@ -692,7 +693,8 @@ def test_e5_at_the_default_resolution_takes_each_perturbations_own_node_count(tm
     from jaxrod.experiments._settings import _settings
     from jaxrod.experiments.e5 import field as mod
     from jaxrod.models.field import default_nodes
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     s = dict(_settings("tiny"), n=None)
     monkeypatch.setattr(mod, "_settings", lambda quick: s)

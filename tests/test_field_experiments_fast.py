@@ -164,7 +164,8 @@ def test_e4_without_a_set_resolution_takes_each_perturbations_default_from_the_s
     its perturbation: 499 nodes for the random velocity (every mode of the 500-segment noise grid)."""
     from jaxrod.experiments._settings import _settings
     from jaxrod.params import RodChannel
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     e4m = importlib.import_module("jaxrod.experiments.e4.field")
     seen = {}
@@ -209,7 +210,8 @@ def test_e6_takes_the_spectrum_before_at_the_first_save_the_perturbation_has_mov
     energy balance."""
     from jaxrod.modal import modal_spectrum
     from jaxrod.params import RodChannel
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     import jax
 

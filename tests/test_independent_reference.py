@@ -28,7 +28,8 @@ f64 = lambda x: jnp.asarray(x, jnp.float64)
 
 def _jaxrod():
     from jaxrod import RodChannel
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     return RodChannel, Scene, make_perturbation
 

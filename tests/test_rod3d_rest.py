@@ -16,7 +16,8 @@ import pytest
 import jaxrod as jr
 from jaxrod import SweepSpec, sweep
 from jaxrod.rod3d import Rod3D
-from jaxrod.scene import Scene, make_perturbation
+from jaxrod.registry import make_perturbation
+from jaxrod.scene import Scene
 
 
 @functools.lru_cache(maxsize=1)

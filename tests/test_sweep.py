@@ -250,7 +250,8 @@ def test_pool_member_equals_its_single_run():
     the same steps and the same stop, whatever lane it ran in. Amplitudes agree to 1e-13: the
     random field's synthesis from the scene's noise grid is a sum whose order XLA may change
     under vmap; labels, stop times and step counts are compared exactly."""
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     spec = SweepSpec(model="field", n=24, perturbation="random-velocity", t1=0.3)
     res = sweep(spec, {"dF": [2.0, 20.0], "amplitude": [0.005, 0.05], "realization": [0, 1]},

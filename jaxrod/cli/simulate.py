@@ -17,7 +17,8 @@ def _cmd_simulate(args) -> int:
     jax.config.update("jax_enable_x64", True)
     import jax.numpy as jnp
 
-    from ..scene import Scene, make_perturbation
+    from ..registry import make_perturbation
+    from ..scene import Scene
 
     rod = _rod_from_args(args, args.mu)  # the other values were checked by cli._checks
     if args.model == "rod3d":

@@ -42,7 +42,8 @@ def dominant_modes_at(kind, amplitude, mus, dFs, n, realizations, seed=5, t1=2.0
     import jax.numpy as jnp
 
     from ..modal import dominant_mode
-    from ..scene import Scene, make_perturbation
+    from ..registry import make_perturbation
+    from ..scene import Scene
 
     R = realizations
     rod0 = RodChannel.reference()

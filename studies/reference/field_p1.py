@@ -105,7 +105,8 @@ def jaxrod_values(n: int, dt_scale: float = 1.0, forcing_modes: int = N) -> tupl
 
     from jaxrod import RodChannel
     from jaxrod.boundary import critical_load, critical_velocity as jx_velocity
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     f = lambda x: jnp.asarray(x, jnp.float64)
     out, steps = {}, {}
@@ -140,7 +141,8 @@ def jaxrod_map_column(n: int, dt: float) -> str:
 
     from jaxrod import RodChannel
     from jaxrod.boundary import crossing_state
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     rod = RodChannel.reference(mu=MU)
     lab = lambda v: float(crossing_state(Scene(rod, jnp.asarray(MAP_DF, jnp.float64),

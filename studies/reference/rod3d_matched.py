@@ -61,7 +61,8 @@ def jaxrod_v0(dF: float, n: int, dt_scale: float = 1.0) -> tuple[float, float]:
 
     from jaxrod import RodChannel
     from jaxrod.boundary import critical_velocity as jx_velocity
-    from jaxrod.scene import Scene, make_perturbation
+    from jaxrod.registry import make_perturbation
+    from jaxrod.scene import Scene
 
     rod = RodChannel.reference(mu=MU)
     F = jnp.asarray(dF, jnp.float64)

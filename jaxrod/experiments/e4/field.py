@@ -33,7 +33,8 @@ def _frictionless_dF(s, amplitude, perturbation):
     import jax.numpy as jnp
 
     from ...boundary import rod_indicator, safeguarded_newton
-    from ...scene import Scene, make_perturbation
+    from ...registry import make_perturbation
+    from ...scene import Scene
 
     rod = RodChannel.reference(mu=0.0)
     n = s["n"] or 128
@@ -71,7 +72,8 @@ def _independent_modes(mus, amplitude, realizations, seed):
 
 def e4(out, quick, progress):
     from ...boundary import critical_load_curve
-    from ...scene import Scene, default_nodes, make_perturbation
+    from ...registry import make_perturbation
+    from ...scene import Scene, default_nodes
 
     s = _settings(quick)
     mus = s["mus"]

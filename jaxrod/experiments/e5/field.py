@@ -19,7 +19,8 @@ __all__ = ['e5']
 
 def e5(out, quick, progress):
     from ...boundary import critical_load_curve
-    from ...scene import Scene, default_nodes, make_perturbation
+    from ...registry import make_perturbation
+    from ...scene import Scene, default_nodes
 
     s = _settings(quick)
     mus = s["mus"]

@@ -21,7 +21,8 @@ def e5(out, quick=False, progress=True, n=None, mus=None) -> dict:
     import jax
 
     from ...params import RodChannel
-    from ...scene import Scene, make_perturbation
+    from ...registry import make_perturbation
+    from ...scene import Scene
 
     s = _settings(quick, n)
     mus = s["mus"] if mus is None else mus

@@ -19,7 +19,8 @@ def e6(out, quick, progress):
 
     from ...boundary import critical_load
     from ...modal import modal_spectrum
-    from ...scene import Scene, make_perturbation
+    from ...registry import make_perturbation
+    from ...scene import Scene
 
     s = _settings(quick)
     res = {"model": "field"}

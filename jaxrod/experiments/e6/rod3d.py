@@ -16,7 +16,8 @@ def e6c(out, quick=False, progress=True, n=None) -> dict:
     import jax
 
     from ...params import RodChannel
-    from ...scene import Scene, make_perturbation
+    from ...registry import make_perturbation
+    from ...scene import Scene
 
     s = _settings(quick, n)
     rod = RodChannel.reference(mu=0.9)

@@ -38,7 +38,8 @@ import numpy as np  # noqa: E402
 import jaxrod as jr  # noqa: E402
 from jaxrod import boundary as bd  # noqa: E402
 from jaxrod.output import write_csv  # noqa: E402
-from jaxrod.scene import Scene, make_perturbation  # noqa: E402
+from jaxrod.registry import make_perturbation  # noqa: E402
+from jaxrod.scene import Scene  # noqa: E402
 
 _ROOT, _, _REL = os.path.dirname(os.path.abspath(__file__)).rpartition(os.sep + "studies")
 HERE = _ROOT + os.sep + "results" + _REL  # this study's data: the same folder under results/
