@@ -115,11 +115,11 @@ class RunState(eqx.Module):
     **Fields:** `q`, `v` (the model's coordinates and velocities, arrays or pytrees), `a`
     (`model.accelerations` at (q, v, t)), `t` [s], `dissipated` (energy removed by friction and
     damping, per degree of freedom: the sum of its leaves is the total), `work_in` (work done by
-    driven boundaries [J]),
-    `buckled`, `t_buckle` [s] (`inf` if not), `stuck` (at the last save), `stopped` (buckled,
-    stuck under a constant load, or non-finite: frozen before the horizon), `steps` (taken),
-    `k` (steps since the last save), `saves` (save intervals completed), `amp_max` (largest
-    amplitude seen at a save or at the stop).
+    driven boundaries [J]), `buckled`, `t_buckle` [s] (`inf` if not), `stuck` (at the last save),
+    `stopped` (buckled, stuck under a constant load, or non-finite: frozen before the horizon),
+    `steps` (taken), `k` (steps since the last save), `saves` (save intervals completed),
+    `amp_max` (largest amplitude seen at a save or at the stop), `control` (an error-controlled
+    scheme's `jaxrod.integrators.adaptive.StepControl`; `None` for a fixed step).
     """
 
     q: Array
@@ -137,8 +137,6 @@ class RunState(eqx.Module):
     saves: Array
     amp_max: Array
     control: Array | None = None
-    """An error-controlled scheme's step control (`jaxrod.integrators.adaptive.StepControl`);
-    `None` for a fixed step."""
 
     def finished(self, n_save: int):
         """Whether the run is over: stopped, or all `n_save − 1` save intervals done."""
@@ -229,8 +227,7 @@ class AbstractFixedStep(AbstractIntegrator):
             saves=jnp.array(0, jnp.int32), amp_max=model.amplitude(q0),
         )
 
-    def advance(self, model: AbstractModel, s: RunState, h, m: int, n_save: int,
-                options: RunOptions) -> RunState:
+    def advance(self, model: AbstractModel, s: RunState, h, m: int, n_save: int, options: RunOptions) -> RunState:
         """One step of `h` [s] with the stop rules, after every step: buckling (amplitude past
         the threshold), a non-finite amplitude, and the stick test (which freezes the run under
         a constant load); at every `m`-th step a save. A finished run is left as it is:
@@ -253,14 +250,12 @@ class AbstractFixedStep(AbstractIntegrator):
             h_run = jnp.where(at_position, jnp.zeros_like(h), h_run)
             q, v, a, (lost, work), v_at = self.step(model, s.q, s.v, s.a, s.t, h_run, h_save=h,
                                                     at_position=at_position)
-        k = s.k + 1
-        return self._book(model, s, q, v, a, lost, work, s.t + h_run, k, k == m, frozen, options), v_at
+        return self._book(model, s, q, v, a, lost, work, s.t + h_run, s.k + 1, s.k + 1 == m, frozen, options), v_at
 
     def _book(self, model, s: RunState, q, v, a, lost, work, t, k, at_save, frozen, options: RunOptions) -> RunState:
-        """The run state after a step to (q, v, a) at `t` that removed `lost` and took in `work`:
-        the stop rules (buckling, non-finite, the stick test) and the save count (`at_save`: the
-        step ends a save interval; `k`: steps since the last save); a `frozen` run keeps its
-        bookkeeping."""
+        """The run state after a step to (q, v, a) at `t` that removed `lost` and took in `work`: the
+        stop rules and the save count (`at_save`: it ends a save interval; `k`: steps since the
+        last save); a `frozen` run keeps its bookkeeping."""
         amp, held = model.stop_measures(q, v, a, t)
         over = amp > options.threshold(model)
         first = over & ~s.buckled
