@@ -146,7 +146,7 @@ class AdaptiveImplicitLeapfrog(ImplicitLeapfrog):
         # a step cut short by a save does not shrink the next one
         cut = h_try < c.h_next * (1 - 1e-12)
         h_next = jnp.where(frozen, c.h_next, jnp.where(accept & cut, jnp.maximum(h_prop, c.h_next), h_prop))
-        t = jnp.where(lands, t_save, s.t + h_try)
+        t = jnp.where(frozen, s.t, jnp.where(lands, t_save, s.t + h_try))  # a stopped run keeps its time
         done = dataclasses.replace(self._book(model, s, q, v_new, a, lost, work, t, s.k + 1, lands, frozen, options),
                                    control=None)
         tried = ~frozen
