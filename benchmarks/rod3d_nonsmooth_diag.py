@@ -13,6 +13,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py gamma-layer                          # gamma's effect against the step (~1 min)
     python benchmarks/rod3d_nonsmooth_diag.py e4-gates --gamma 0 --dt 2e-5         # E4 B and C, mu 0.05/0.3/1, 3 realizations
     python benchmarks/rod3d_nonsmooth_diag.py adaptive-steps --n 60 500            # the error-controlled step on E4 C
+    python benchmarks/rod3d_nonsmooth_diag.py b-ends --scheme coupled               # E4 B's bracket ends, one scheme
     python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
     python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
 
@@ -268,6 +269,31 @@ def adaptive_steps(args):
                               wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
 
+def b_ends(args):
+    """E4 B (random velocity ±15 mm/s, realization 0) at μ = 0.05, 500 segments, 0.5 s, at the two
+    ends of the search's bracket (1.352 and 3.043 N): buckled or not, when and the amplitude every
+    50 ms, by the explicit leapfrog (`--scheme explicit`) or the implicit scheme forced (`local` or
+    `coupled`, `--gamma`, `--dt`)."""
+    from jaxrod import perturbations
+
+    if args.scheme != "explicit":
+        SCHEMES["implicit"] = _scheme(args.scheme, args.gamma)
+        for c in (perturbations.RandomForce, perturbations.RandomVelocity):
+            c.implicit_3d = True
+        Rod3D.implicit_step = args.dt
+    rod = jr.RodChannel.reference(0.05)
+    key = jax.random.fold_in(jax.random.key(0), 0)
+    for dF in (1.3523260915353308, 3.042733705954494):
+        t = time.perf_counter()
+        scene = jr.Scene(rod, dF, perturbation=jr.RandomVelocity(15e-3, key), kind="rod3d", n=500)
+        sol = scene.run(t1=0.5, n_save=11, save_state=False)
+        print(json.dumps(dict(what="E4 B mu 0.05 r0 at a bracket end, 0.5 s", scheme=args.scheme,
+                              integrator=type(scene.integrator()).__name__, gamma=args.gamma, dt=args.dt, dF=dF,
+                              buckled=bool(sol.buckled), t_buckle=float(sol.t_buckle), result=int(sol.result),
+                              amplitude=[round(float(a), 4) for a in sol.amplitude],
+                              wall_s=round(time.perf_counter() - t, 1))), flush=True)
+
+
 def gamma_layer(args):
     """E3's start on 12 segments (sine mode 6 at 0.02 m/s on the nodes, segments not turning, F⁰₆ + 5 N,
     μ = 0.3) to 0.02 s: the largest lateral node displacement's difference from the explicit
@@ -310,6 +336,10 @@ def main():
     p.add_argument("--tau", type=float, nargs="+", default=[0.02, 0.1])
     sub.add_parser("wrinkle")
     sub.add_parser("gamma-layer")
+    p = sub.add_parser("b-ends")
+    p.add_argument("--scheme", choices=["explicit", "local", "coupled"], default="coupled")
+    p.add_argument("--gamma", type=float, default=0.0)
+    p.add_argument("--dt", type=float, default=1e-5)
     p = sub.add_parser("adaptive-steps")
     p.add_argument("--n", type=int, nargs="+", default=[60, 500])
     p.add_argument("--t1", type=float, default=0.05)
@@ -333,7 +363,8 @@ def main():
     p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
     args = ap.parse_args()
     {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes,
-     "gamma-layer": gamma_layer, "e4-gates": e4_gates, "adaptive-steps": adaptive_steps}[args.cmd](args)
+     "gamma-layer": gamma_layer, "e4-gates": e4_gates, "adaptive-steps": adaptive_steps,
+     "b-ends": b_ends}[args.cmd](args)
 
 
 if __name__ == "__main__":
