@@ -124,15 +124,10 @@ class AdaptiveImplicitLeapfrog(ImplicitLeapfrog):
         # within two steps of the save: two equal steps, not a long one and a short one
         h_try = jnp.where(lands, left, jnp.where(left < 2 * c.h_next, 0.5 * left, c.h_next))
         h_try = jnp.where(frozen, 0.0, h_try)
-        hk = jnp.where(s.t > 0, 0.5 * (c.h_prev + h_try), 0.5 * h_try)
-        hk = jnp.where(at_position, jnp.where(s.t > 0, 0.5 * c.h_prev, 0.0), jnp.where(frozen, 0.0, hk))
-        v_trial, v_new, aux = self.kick_and_friction(model, s.q, s.v, s.a, hk, jnp.where(at_position, c.h_prev, h_try),
-                                                     s.t)
-        v_at = jax.tree_util.tree_map(lambda new, old: jnp.where(s.t > 0, new, old), v_new, s.v)
-        lost, work = model.impulse_work(s.v, v_trial, v_new, s.a, hk)
-        lost = self.kick_loss(model, s.v, v_new, aux, lost)
-        q = model.drift(s.q, v_new, h_try)
-        a = model.accelerations(q, v_new, s.t + h_try)
+        hk = jnp.where(frozen, 0.0, jnp.where(s.t > 0, 0.5 * (c.h_prev + h_try), 0.5 * h_try))
+        # the leapfrog's step with this kick; at the position, its velocity pass with the last step
+        q, v_new, a, (lost, work), v_at = self.step(model, s.q, s.v, s.a, s.t, h_try, h_save=c.h_prev,
+                                                    at_position=at_position, hk=hk)
         err = model.step_error(s.q, q, s.a, a, h_try, self.beta, self.rtol, self.atol)
         err = jnp.where(jnp.isfinite(err), err, jnp.inf)
         at_min = h_try <= dt_min * (1 + 1e-9)

@@ -40,15 +40,17 @@ class ProjectedLeapfrog(AbstractProjected):
     - `friction`: the friction law (default [`jaxrod.Coulomb`][]).
     """
 
-    def step(self, model, q, v, a, t, h, h_save=None, at_position=None):
+    def step(self, model, q, v, a, t, h, h_save=None, at_position=None, hk=None):
         """One step (`h` [s]); with `at_position` (a traced bool) where it is true, instead the
         velocity pass of `velocity_at` at the save step `h_save`, in the same computation: one
         copy of the friction pass to compile, not two (the 3D rod's run compiled 12.2 → 7.4 s
         without the second copy, e3e6015's CLI command). Then `h` must be 0 there, the carried
         velocity, the position (a drift of 0) and the forces (recomputed from the same inputs)
         come back unchanged, no work is counted, and the velocity at the position is returned as
-        a fifth output."""
-        hk = jnp.where(t > 0, h, 0.5 * h)  # the first step starts from the velocity at t = 0
+        a fifth output. `hk`: the kick's length where not the step's (a variable step's mean of the
+        two steps around the position, `jaxrod.AdaptiveImplicitLeapfrog`)."""
+        if hk is None:
+            hk = jnp.where(t > 0, h, 0.5 * h)  # the first step starts from the velocity at t = 0
         if at_position is not None:
             hk = jnp.where(at_position, jnp.where(t > 0, 0.5 * h_save, jnp.zeros_like(hk)), hk)
         h_kick = jnp.where(at_position, h_save, h) if at_position is not None else h
