@@ -14,6 +14,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py e4-gates --gamma 0 --dt 2e-5         # E4 B and C, mu 0.05/0.3/1, 3 realizations
     python benchmarks/rod3d_nonsmooth_diag.py adaptive-steps --n 60 500            # the error-controlled step on E4 C
     python benchmarks/rod3d_nonsmooth_diag.py b-ends --scheme coupled               # E4 B's bracket ends, one scheme
+    python benchmarks/rod3d_nonsmooth_diag.py b-decay --scheme coupled --dt 1e-5 5e-6  # E4 B's first 0.1 s: energy, stick
     python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
     python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
 
@@ -294,6 +295,38 @@ def b_ends(args):
                               wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
 
+def b_decay(args):
+    """E4 B (random velocity ±15 mm/s, realization 0) at μ = 0.05, 500 segments, at the lower end
+    of the bracket (1.352 N) for `--t1` s: every 1 ms the kinetic energy, the fraction of nodes
+    stuck, the energy friction has dissipated and the amplitude, by the explicit leapfrog or the
+    implicit scheme forced at each `--dt` (`--scheme`, `--gamma`). Asks whether the implicit step
+    lets the random velocity's segment-scale energy live longer (fewer oscillations per second
+    for friction to dissipate it), keeping the rod sliding where the explicit scheme sticks."""
+    from jaxrod import perturbations
+
+    rod = jr.RodChannel.reference(0.05)
+    key = jax.random.fold_in(jax.random.key(0), 0)
+    n_save = int(round(args.t1 / 1e-3)) + 1
+    for dt in ([None] if args.scheme == "explicit" else args.dt):
+        if dt is not None:
+            SCHEMES["implicit"] = _scheme(args.scheme, args.gamma)
+            for c in (perturbations.RandomForce, perturbations.RandomVelocity):
+                c.implicit_3d = True
+            Rod3D.implicit_step = dt
+        t = time.perf_counter()
+        scene = jr.Scene(rod, 1.3523260915353308, perturbation=jr.RandomVelocity(15e-3, key), kind="rod3d", n=500)
+        sol = scene.run(t1=args.t1, n_save=n_save, save_state=False)
+        ke = sol.energies["kinetic"]
+        print(json.dumps(dict(what="E4 B mu 0.05 r0 at 1.352 N: decay of the random velocity", scheme=args.scheme,
+                              integrator=type(scene.integrator()).__name__, gamma=args.gamma, dt=dt,
+                              steps=int(sol.n_steps), t=[round(float(x), 4) for x in sol.ts],
+                              kinetic=[float(x) for x in ke],
+                              stuck_fraction=[round(float(x), 4) for x in sol.observables["stuck_fraction"]],
+                              dissipated=[float(x) for x in sol.dissipated],
+                              amplitude=[round(float(a), 5) for a in sol.amplitude],
+                              result=int(sol.result), wall_s=round(time.perf_counter() - t, 1))), flush=True)
+
+
 def gamma_layer(args):
     """E3's start on 12 segments (sine mode 6 at 0.02 m/s on the nodes, segments not turning, F⁰₆ + 5 N,
     μ = 0.3) to 0.02 s: the largest lateral node displacement's difference from the explicit
@@ -358,13 +391,18 @@ def main():
     p.add_argument("--dt", type=float, default=5e-5)
     p.add_argument("--n", type=int, default=60)
     p.add_argument("--dF", type=float, nargs="+", default=[5.0, 20.0])
+    p = sub.add_parser("b-decay")
+    p.add_argument("--scheme", choices=["explicit", "local", "coupled"], default="coupled")
+    p.add_argument("--gamma", type=float, default=0.0)
+    p.add_argument("--dt", type=float, nargs="+", default=[1e-5, 5e-6])
+    p.add_argument("--t1", type=float, default=0.1)
     p = sub.add_parser("modes")
     p.add_argument("--n", type=int, default=500)
     p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
     args = ap.parse_args()
     {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes,
      "gamma-layer": gamma_layer, "e4-gates": e4_gates, "adaptive-steps": adaptive_steps,
-     "b-ends": b_ends}[args.cmd](args)
+     "b-ends": b_ends, "b-decay": b_decay}[args.cmd](args)
 
 
 if __name__ == "__main__":
