@@ -23,8 +23,15 @@ def safe_hypot(a: Float[Array, "..."], b: Float[Array, "..."]) -> Float[Array, "
 
 
 def float_leaf(x):
-    """`x` as an array of the default float dtype: a model's physical number."""
-    return jnp.asarray(x, dtype=jnp.result_type(float))
+    """`x` as a floating array leaf: a physical number of a model, load, perturbation or formula.
+
+    A Python number, or an array of integers or booleans, becomes an array of the default float
+    dtype (strongly typed, so that it does not follow another operand's precision); a floating
+    array keeps its dtype. The one converter every module uses."""
+    if isinstance(x, (int, float)):
+        return jnp.asarray(x, dtype=jnp.result_type(float))
+    x = jnp.asarray(x)
+    return x if jnp.issubdtype(x.dtype, jnp.floating) else x.astype(jnp.result_type(float))
 
 
 def computed_once(values, ref: Float[Array, "..."]):

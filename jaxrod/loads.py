@@ -8,13 +8,9 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from ._numerics import float_leaf
+
 __all__ = ["AbstractLoad", "ConstantLoad", "RampLoad", "as_load"]
-
-
-def _f(x):
-    if isinstance(x, (int, float)):
-        return jnp.asarray(x, dtype=jnp.result_type(float))
-    return jnp.asarray(x)
 
 
 class AbstractLoad(eqx.Module):
@@ -37,7 +33,7 @@ class AbstractLoad(eqx.Module):
 class ConstantLoad(AbstractLoad):
     """F(t) = `F` [N] (a dynamic leaf)."""
 
-    F: Float[Array, ""] = eqx.field(converter=_f)
+    F: Float[Array, ""] = eqx.field(converter=float_leaf)
 
     def __call__(self, t):
         return self.F
@@ -54,10 +50,10 @@ class RampLoad(AbstractLoad):
     """F rises linearly from `F_start` at `t_start` to `F_end` at `t_end` and is held constant
     outside [`t_start`, `t_end`] (all [N] or [s], dynamic leaves)."""
 
-    F_start: Float[Array, ""] = eqx.field(converter=_f)
-    F_end: Float[Array, ""] = eqx.field(converter=_f)
-    t_start: Float[Array, ""] = eqx.field(converter=_f)
-    t_end: Float[Array, ""] = eqx.field(converter=_f)
+    F_start: Float[Array, ""] = eqx.field(converter=float_leaf)
+    F_end: Float[Array, ""] = eqx.field(converter=float_leaf)
+    t_start: Float[Array, ""] = eqx.field(converter=float_leaf)
+    t_end: Float[Array, ""] = eqx.field(converter=float_leaf)
 
     def __call__(self, t):
         span = jnp.maximum(self.t_end - self.t_start, jnp.finfo(jnp.result_type(float)).tiny)

@@ -10,16 +10,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from ._numerics import float_leaf
+
 __all__ = ["RodChannel"]
-
-
-def _as_float(x: ArrayLike) -> Float[Array, "..."]:
-    if isinstance(x, (int, float)):  # Python scalars become strongly typed arrays
-        return jnp.asarray(x, dtype=jnp.result_type(float))
-    x = jnp.asarray(x)
-    if not jnp.issubdtype(x.dtype, jnp.floating):
-        x = x.astype(jnp.result_type(float))
-    return x
 
 
 def _concrete(x) -> np.ndarray | None:
@@ -63,15 +56,15 @@ class RodChannel(eqx.Module):
     checked at construction; the drivers then report bad members through result codes.
     """
 
-    L: Float[Array, "..."] = eqx.field(converter=_as_float)
-    d: Float[Array, "..."] = eqx.field(converter=_as_float)
-    E: Float[Array, "..."] = eqx.field(converter=_as_float)
-    rho_v: Float[Array, "..."] = eqx.field(converter=_as_float)
-    nu: Float[Array, "..."] = eqx.field(converter=_as_float)
-    R: Float[Array, "..."] = eqx.field(converter=_as_float)
-    g: Float[Array, "..."] = eqx.field(converter=_as_float)
-    mu_s: Float[Array, "..."] = eqx.field(converter=_as_float)
-    mu_d: Float[Array, "..."] = eqx.field(converter=_as_float)
+    L: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    d: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    E: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    rho_v: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    nu: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    R: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    g: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    mu_s: Float[Array, "..."] = eqx.field(converter=float_leaf)
+    mu_d: Float[Array, "..."] = eqx.field(converter=float_leaf)
 
     def __check_init__(self):
         positive = {

@@ -27,6 +27,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
 
+from ._numerics import float_leaf
 from .models.base import AbstractModel
 
 __all__ = [
@@ -41,12 +42,6 @@ __all__ = [
     "scene_noise_modes",
     "GRID",
 ]
-
-
-def _f(x):
-    if isinstance(x, (int, float)):
-        return jnp.asarray(x, dtype=jnp.result_type(float))
-    return jnp.asarray(x)
 
 
 GRID = 500  # segments of the scene's noise grid: the reference paper's rod
@@ -133,8 +128,8 @@ class SineVelocity(AbstractPerturbation):
     implicit_3d: ClassVar[bool] = True
     projects_exactly: ClassVar[bool] = True
 
-    amplitude: Float[Array, ""] = eqx.field(converter=_f)
-    mode: Float[Array, ""] = eqx.field(converter=_f, default=6.0)
+    amplitude: Float[Array, ""] = eqx.field(converter=float_leaf)
+    mode: Float[Array, ""] = eqx.field(converter=float_leaf, default=6.0)
 
     @classmethod
     def from_settings(cls, amplitude, mode, key, duration):
@@ -175,7 +170,7 @@ class RandomVelocity(_AbstractNoiseState):
     `amplitude`] on every node of the scene's noise grid (`grid` segments, static; see the
     module) from `key`; the rod straight."""
 
-    amplitude: Float[Array, ""] = eqx.field(converter=_f)
+    amplitude: Float[Array, ""] = eqx.field(converter=float_leaf)
     key: PRNGKeyArray
     grid: int | None = eqx.field(static=True, default=GRID)
 
@@ -189,7 +184,7 @@ class RandomShape(_AbstractNoiseState):
     `amplitude`] on every node of the scene's noise grid (`grid` segments, static) from `key`,
     released from rest."""
 
-    amplitude: Float[Array, ""] = eqx.field(converter=_f)
+    amplitude: Float[Array, ""] = eqx.field(converter=float_leaf)
     key: PRNGKeyArray
     grid: int | None = eqx.field(static=True, default=GRID)
 
@@ -208,9 +203,9 @@ class RandomForce(AbstractPerturbation):
     The forcing phase is integrated with the run's fixed-step integrator (required).
     """
 
-    amplitude: Float[Array, ""] = eqx.field(converter=_f)
+    amplitude: Float[Array, ""] = eqx.field(converter=float_leaf)
     key: PRNGKeyArray
-    duration: Float[Array, ""] = eqx.field(converter=_f, default=1e-3)
+    duration: Float[Array, ""] = eqx.field(converter=float_leaf, default=1e-3)
     grid: int | None = eqx.field(static=True, default=GRID)
 
     @classmethod
@@ -250,8 +245,8 @@ class UserState(AbstractPerturbation):
     """Any initial state given directly in the model's coordinates: `q0` [rad] and `v0`
     [rad/s] (θ, θ̇ at the nodes of a field model; modal amplitudes of a Galerkin model)."""
 
-    q0: Float[Array, " n"] = eqx.field(converter=_f)
-    v0: Float[Array, " n"] = eqx.field(converter=_f)
+    q0: Float[Array, " n"] = eqx.field(converter=float_leaf)
+    v0: Float[Array, " n"] = eqx.field(converter=float_leaf)
 
     @classmethod
     def from_settings(cls, amplitude, mode, key, duration):
@@ -271,7 +266,7 @@ def project_to_mode(
     (used to start the single-mode model from a field perturbation)."""
     n = theta.shape[-1]
     j = jnp.arange(1, n + 1, dtype=theta.dtype)
-    return (2.0 / (n + 1)) * jnp.sum(theta * jnp.sin(jnp.pi * j * _f(mode) / (n + 1)))
+    return (2.0 / (n + 1)) * jnp.sum(theta * jnp.sin(jnp.pi * j * float_leaf(mode) / (n + 1)))
 
 
 def initial_state(perturbation: AbstractPerturbation, model, integrator=None):

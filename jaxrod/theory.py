@@ -21,6 +21,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
+from ._numerics import float_leaf
 from .params import RodChannel
 
 __all__ = [
@@ -44,14 +45,9 @@ __all__ = [
 ]
 
 
-def _f(x: ArrayLike) -> Float[Array, "..."]:
-    x = jnp.asarray(x)
-    return x if jnp.issubdtype(x.dtype, jnp.floating) else x.astype(jnp.result_type(float))
-
-
 def wavenumber(rod: RodChannel, m: ArrayLike) -> Float[Array, "..."]:
     """ω_m = mπ/L [rad/m] of the pinned-pinned sine mode `m` (m = 1, 2, ...)."""
-    return _f(m) * math.pi / rod.L
+    return float_leaf(m) * math.pi / rod.L
 
 
 def frictionless_load(rod: RodChannel, m: ArrayLike, planar: bool = False) -> Float[Array, "..."]:
@@ -68,7 +64,7 @@ def stiffness(
 ) -> Float[Array, "..."]:
     """k_m = (ω_m²/ρ)(F⁰_m − F) [1/s²] (P3) under a compressive axial load `F` [N]."""
     om2 = wavenumber(rod, m) ** 2
-    return om2 / rod.rho * (frictionless_load(rod, m, planar) - _f(F))
+    return om2 / rod.rho * (frictionless_load(rod, m, planar) - float_leaf(F))
 
 
 def friction_amplitude(
@@ -79,7 +75,7 @@ def friction_amplitude(
     `mu` defaults to the rod's dynamic coefficient `mu_d`. With `planar=True` the amplitude is a
     lateral displacement and f = 4μN/(πρ) [m/s²].
     """
-    mu = rod.mu_d if mu is None else _f(mu)
+    mu = rod.mu_d if mu is None else float_leaf(mu)
     f = 4 * mu * rod.N / (math.pi * rod.rho)
     return f if planar else f / rod.R
 
@@ -127,7 +123,7 @@ def max_growth_rate(rod: RodChannel, F: ArrayLike) -> Float[Array, "..."]:
     −k(κ) = κ²(F − EIκ²)/ρ − ρg/(ρR) is largest at κ² = F/(2EI)); 0 if nothing grows. Sliding
     friction is a constant force and does not change it: every departure from a marginally held
     state grows at most this fast."""
-    F = _f(F)
+    F = float_leaf(F)
     lam2 = F**2 / (4 * rod.EI * rod.rho) - rod.w / (rod.R * rod.rho)
     return jnp.sqrt(jnp.maximum(lam2, 0.0))
 
@@ -135,7 +131,7 @@ def max_growth_rate(rod: RodChannel, F: ArrayLike) -> Float[Array, "..."]:
 def velocity_intercept(k: ArrayLike, f: ArrayLike) -> Float[Array, "..."]:
     """Ȧ_cr = f/√|k| (P6): the largest pure velocity perturbation that leaves a loaded
     (k < 0) single mode stable. `inf` where k ≥ 0 (every trajectory is bounded)."""
-    k, f = _f(k), _f(f)
+    k, f = float_leaf(k), float_leaf(f)
     neg = k < 0
     safe_k = jnp.where(neg, k, -1.0)
     return jnp.where(neg, f / jnp.sqrt(-safe_k), jnp.inf)
@@ -144,7 +140,7 @@ def velocity_intercept(k: ArrayLike, f: ArrayLike) -> Float[Array, "..."]:
 def position_intercept(k: ArrayLike, f: ArrayLike) -> Float[Array, "..."]:
     """A_cr = f/|k| (P6): half-width of the stick line, the largest pure position perturbation
     released from rest that stays put. `inf` where k = 0."""
-    k, f = _f(k), _f(f)
+    k, f = float_leaf(k), float_leaf(f)
     nz = k != 0
     safe_k = jnp.where(nz, k, 1.0)
     return jnp.where(nz, f / jnp.abs(safe_k), jnp.inf)
@@ -173,8 +169,8 @@ def in_stable_zone(
 
     **Returns:** a boolean array, the broadcast of the arguments.
     """
-    A, Adot, k, f = _f(A), _f(Adot), _f(k), _f(f)
-    fs = f if f_static is None else _f(f_static)
+    A, Adot, k, f = float_leaf(A), float_leaf(Adot), float_leaf(k), float_leaf(f)
+    fs = f if f_static is None else float_leaf(f_static)
     flip = Adot < 0
     A = jnp.where(flip, -A, A)
     Adot = jnp.abs(Adot)
@@ -211,7 +207,7 @@ def stable_zone_boundary(
 
     **Returns:** `(A, Adot)`, the polygon's vertices [rad, rad/s], each of shape (4n,).
     """
-    k, f = _f(k), _f(f)
+    k, f = float_leaf(k), float_leaf(f)
     lam = jnp.sqrt(-k)
     a = f / (-k)
     s = jnp.linspace(0.0, 1.0, n)
@@ -237,7 +233,7 @@ def critical_load_velocity(
     on the stable zone's velocity intercept."""
     f = friction_amplitude(rod, mu, planar)
     om2 = wavenumber(rod, m) ** 2
-    return frictionless_load(rod, m, planar) + rod.rho * f**2 / (om2 * _f(Adot0) ** 2)
+    return frictionless_load(rod, m, planar) + rod.rho * f**2 / (om2 * float_leaf(Adot0) ** 2)
 
 
 def critical_load_position(
@@ -252,7 +248,7 @@ def critical_load_position(
     line."""
     f = friction_amplitude(rod, mu, planar)
     om2 = wavenumber(rod, m) ** 2
-    return frictionless_load(rod, m, planar) + rod.rho * f / (om2 * jnp.abs(_f(A0)))
+    return frictionless_load(rod, m, planar) + rod.rho * f / (om2 * jnp.abs(float_leaf(A0)))
 
 
 def critical_loads(
@@ -297,4 +293,4 @@ def held_end_amplitude(rod: RodChannel, dF: ArrayLike, m: ArrayLike = 6) -> Floa
     held (EA·shortening/L = ΔF). A rod with held ends that buckles settles near this amplitude
     instead of growing without bound (0.38 rad at ΔF = 5 N for the reference rod), so a fixed
     0.5 rad threshold cannot tell buckled from stable there."""
-    return 2.0 / (rod.R * wavenumber(rod, m)) * jnp.sqrt(jnp.maximum(_f(dF), 0.0) / rod.EA)
+    return 2.0 / (rod.R * wavenumber(rod, m)) * jnp.sqrt(jnp.maximum(float_leaf(dF), 0.0) / rod.EA)

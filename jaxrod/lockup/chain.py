@@ -11,7 +11,8 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .closed_forms import HELICAL_LAWS, HELICAL_ONSETS, SINUSOIDAL_LAWS
-from .closed_forms import _check, _choice, _f, _rod, _si, _transfer, _transfer_length, transfer_length
+from .._numerics import float_leaf
+from .closed_forms import _check, _choice, _rod, _si, _transfer, _transfer_length, transfer_length
 
 __all__ = ["wall_force", "far_force", "entry_force", "force_profile", "far_force_max", "lockup_length", "section_extents"]
 
@@ -188,7 +189,7 @@ def section_extents(F_in: ArrayLike, L: ArrayLike, EI: ArrayLike, w: ArrayLike, 
     fh, fs, sin, hel = _laws(**laws)
     L = _check("L", L, "m")
     f_in, X, _ = _si(F_in, L, EI, w, r, mu)
-    EI, w, r, mu = _f(EI), _f(w), _f(r), _f(mu)
+    EI, w, r, mu = float_leaf(EI), float_leaf(w), float_leaf(r), float_leaf(mu)
     ell = jnp.sqrt(EI / (r * w))
     _, xh, xs = _chain(f_in, X, fh, fs, sin, hel)
 

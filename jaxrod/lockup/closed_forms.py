@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .._numerics import float_leaf
 from ..params import _concrete, _fmt
 
 __all__ = [
@@ -73,11 +74,6 @@ uniform helix in full contact."""
 # Argument checks (concrete values only: under jit/vmap the arguments are tracers).
 
 
-def _f(x: ArrayLike) -> Float[Array, "..."]:
-    x = jnp.asarray(x)
-    return x if jnp.issubdtype(x.dtype, jnp.floating) else x.astype(jnp.result_type(float))
-
-
 def _check(name: str, x: ArrayLike, unit: str, *, positive: bool = False,
            allow_inf: bool = False) -> Float[Array, "..."]:
     """`x` as a float array; `ValueError` naming `name` if it is concrete and NaN, negative
@@ -91,7 +87,7 @@ def _check(name: str, x: ArrayLike, unit: str, *, positive: bool = False,
             rule = "> 0" if positive else ">= 0"
             fin = "not NaN" if allow_inf else "finite"
             raise ValueError(f"{name} = {_fmt(v)}{' ' + unit if unit else ''} is invalid: it must be {fin} and {rule}.")
-    return _f(x)
+    return float_leaf(x)
 
 
 def _rod(EI, w, r):
