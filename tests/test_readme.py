@@ -36,7 +36,7 @@ import unicodedata
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-LIMITS = {"README.md": 150, "docs/status.md": 240, "benchmarks/README.md": 445}  # README: the front door; the
+LIMITS = {"README.md": 150, "docs/status.md": 240, "benchmarks/README.md": 400}  # README: the front door; the
 # measurements behind it in docs/status.md
 FILES = sorted(LIMITS)
 
