@@ -1,27 +1,29 @@
-"""Names at the edge: one registry of model and perturbation classes by the names the command
-line, JSON settings and file names use. Everything below the edge works with the classes.
+"""Names at the edge: one registry of model recipes and perturbation classes by the names the
+command line, JSON settings and file names use. Everything below the edge works with the objects.
 
-    jaxrod.registry.register_model("toy", ToyModel)   # then Scene(kind="toy"), sweeps, CLI
-    jaxrod.registry.model_class("field")               # -> jaxrod.FieldModel
+    jaxrod.registry.register_model("toy", ToyRecipe())  # then Scene(kind="toy"), sweeps, CLI
+    jaxrod.registry.recipe("field")                      # -> jaxrod.models.field.FieldRecipe()
+    jaxrod.registry.model_class("field")                 # -> jaxrod.FieldModel
 
-A model registers a subclass of [`jaxrod.AbstractModel`][] (it implements the scene group of
-the interface), a perturbation a subclass of [`jaxrod.perturbations.AbstractPerturbation`][]
-(with `from_settings`). See docs/extending.md.
+A model registers its recipe (a [`jaxrod.models.recipe.AbstractRecipe`][], whose `model_class`
+is a subclass of [`jaxrod.AbstractModel`][]), a perturbation a subclass of
+[`jaxrod.perturbations.AbstractPerturbation`][] (with `from_settings`). See docs/extending.md.
 """
 
 from __future__ import annotations
 
 import importlib
 
-__all__ = ["register_model", "register_perturbation", "model_class", "perturbation_class", "model_names",
-           "perturbation_names", "name_of_model", "make_perturbation"]
+__all__ = ["register_model", "register_perturbation", "recipe", "model_class", "perturbation_class", "model_names",
+           "perturbation_names", "name_of_model", "recipe_of", "make_perturbation"]
 
-# name -> class, or "module:attribute" for a class imported when first asked for
+# name -> recipe (models) or class (perturbations), or "module:attribute" for a class imported
+# when first asked for (a recipe class is made into its instance)
 _MODELS: dict[str, object] = {
-    "mode": "jaxrod.models.single_mode:SingleMode",
-    "galerkin": "jaxrod.models.galerkin:GalerkinModel",
-    "field": "jaxrod.models.field:FieldModel",
-    "rod3d": "jaxrod.rod3d.model:Rod3D",
+    "mode": "jaxrod.models.single_mode:SingleModeRecipe",
+    "galerkin": "jaxrod.models.galerkin:GalerkinRecipe",
+    "field": "jaxrod.models.field:FieldRecipe",
+    "rod3d": "jaxrod.rod3d.recipe:Rod3DRecipe",
 }
 _PERTURBATIONS: dict[str, object] = {
     "sine": "jaxrod.perturbations:SineVelocity",
@@ -31,46 +33,62 @@ _PERTURBATIONS: dict[str, object] = {
 }
 
 
-def _register(table: dict, what: str, name: str, cls) -> None:
+def _check_name(what: str, name: str) -> None:
     if not (isinstance(name, str) and name and not any(c.isspace() for c in name)):
         raise ValueError(f"{what} name = {name!r} is invalid: expected a non-empty string without spaces.")
-    if not isinstance(cls, type):
-        raise TypeError(f"{what} {name!r}: expected a class, got {cls!r}.")
-    table[name] = cls
 
 
-def register_model(name: str, cls) -> None:
-    """Make the model class `cls` (a subclass of [`jaxrod.AbstractModel`][]) available by `name`
-    to scenes, sweeps, boundary searches and the command line (replacing one of that name)."""
+def register_model(name: str, recipe) -> None:
+    """Make the model of `recipe` (an instance of a [`jaxrod.models.recipe.AbstractRecipe`][]
+    subclass, whose `model_class` is a subclass of [`jaxrod.AbstractModel`][]) available by
+    `name` to scenes, sweeps, boundary searches and the command line (replacing one of that name)."""
     from .models.base import AbstractModel
+    from .models.recipe import AbstractRecipe
 
-    if isinstance(cls, type) and not issubclass(cls, AbstractModel):
-        raise TypeError(f"model {name!r}: {cls.__name__} is not a subclass of jaxrod.AbstractModel.")
-    _register(_MODELS, "model", name, cls)
+    _check_name("model", name)
+    if isinstance(recipe, type) and issubclass(recipe, AbstractModel):
+        raise TypeError(f"model {name!r}: {recipe.__name__} is a model class; register its recipe, an "
+                        "AbstractRecipe instance (docs/extending.md).")
+    if not isinstance(recipe, AbstractRecipe):
+        raise TypeError(f"model {name!r}: expected an AbstractRecipe instance (the model's recipe), got {recipe!r}.")
+    cls = recipe.model_class
+    if not (isinstance(cls, type) and issubclass(cls, AbstractModel)):
+        raise TypeError(f"model {name!r}: {type(recipe).__name__}.model_class = {getattr(cls, '__name__', cls)} is "
+                        "not a subclass of jaxrod.AbstractModel.")
+    _MODELS[name] = recipe
 
 
 def register_perturbation(name: str, cls) -> None:
     """Make the perturbation class `cls` (with `from_settings`) available by `name`."""
     from .perturbations import AbstractPerturbation
 
-    if isinstance(cls, type) and not issubclass(cls, AbstractPerturbation):
+    _check_name("perturbation", name)
+    if not isinstance(cls, type):
+        raise TypeError(f"perturbation {name!r}: expected a class, got {cls!r}.")
+    if not issubclass(cls, AbstractPerturbation):
         raise TypeError(f"perturbation {name!r}: {cls.__name__} is not a subclass of AbstractPerturbation.")
-    _register(_PERTURBATIONS, "perturbation", name, cls)
+    _PERTURBATIONS[name] = cls
 
 
-def _lookup(table: dict, name: str, argument: str):
+def _lookup(table: dict, name: str, argument: str, instance: bool = False):
     if name not in table:
         raise ValueError(f"{argument} = {name!r} is invalid: expected one of {tuple(table)}.")
-    cls = table[name]
-    if isinstance(cls, str):
-        module, attr = cls.split(":")
-        cls = table[name] = getattr(importlib.import_module(module), attr)
-    return cls
+    obj = table[name]
+    if isinstance(obj, str):
+        module, attr = obj.split(":")
+        obj = getattr(importlib.import_module(module), attr)
+        table[name] = obj = obj() if instance else obj
+    return obj
+
+
+def recipe(name: str, argument: str = "model"):
+    """The recipe of the model registered as `name` (`argument`: the name of the setting, for the error)."""
+    return _lookup(_MODELS, name, argument, instance=True)
 
 
 def model_class(name: str, argument: str = "model"):
-    """The model class registered as `name` (`argument`: the name of the setting, for the error)."""
-    return _lookup(_MODELS, name, argument)
+    """The model class registered as `name`: its recipe's `model_class`."""
+    return recipe(name, argument).model_class
 
 
 def perturbation_class(name: str, argument: str = "perturbation"):
@@ -94,6 +112,11 @@ def name_of_model(cls) -> str:
         if model_class(name) is cls:
             return name
     raise ValueError(f"model class {cls!r} is not registered.")
+
+
+def recipe_of(model):
+    """The registered recipe of the model `model` (an instance of a registered model class)."""
+    return recipe(name_of_model(type(model)))
 
 
 def make_perturbation(kind: str, amplitude, mode: int = 6, key=None, duration=1e-3):

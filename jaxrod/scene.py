@@ -12,6 +12,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from . import theory
+from ._numerics import float_leaf
 from .integrators import AbstractFixedStep, ProjectedVerlet, default_for
 from .integrators.base import RunOptions
 from .models.dof import DT_FRACTION, static_float
@@ -19,7 +20,7 @@ from .models.field import DEFAULT_NODES, FieldModel, default_nodes
 from .models.galerkin import DEFAULT_MODES
 from .params import RodChannel
 from .perturbations import AbstractPerturbation, SineVelocity
-from .registry import model_class, model_names, perturbation_names
+from .registry import model_names, perturbation_names, recipe
 from .simulate import simulate
 
 __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1",
@@ -29,12 +30,6 @@ __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES",
 MODELS = model_names()
 PERTURBATIONS = perturbation_names()
 DEFAULT_T1 = 2.0  # s, as the reference paper
-
-
-def _f(x):
-    if isinstance(x, (int, float)):
-        return jnp.asarray(x, dtype=jnp.result_type(float))
-    return jnp.asarray(x)
 
 
 class Scene(eqx.Module):
@@ -62,7 +57,7 @@ class Scene(eqx.Module):
     """
 
     rod: RodChannel
-    dF: Float[Array, ""] = eqx.field(converter=_f)
+    dF: Float[Array, ""] = eqx.field(converter=float_leaf)
     perturbation: AbstractPerturbation = eqx.field(default_factory=lambda: SineVelocity(0.01, 6.0))
     kind: str = eqx.field(static=True, default="field")
     n: int | None = eqx.field(static=True, default=None)
@@ -74,7 +69,7 @@ class Scene(eqx.Module):
     scheme_key: str | None = eqx.field(static=True, default=None)
 
     def __check_init__(self):
-        cls = model_class(self.kind)
+        cls = recipe(self.kind)
         if not (isinstance(self.mode, int) and self.mode >= 1):
             raise ValueError(f"mode = {self.mode!r} is invalid: expected an int >= 1.")
         if self.n is not None and not (isinstance(self.n, int) and self.n >= cls.min_size):
@@ -84,9 +79,14 @@ class Scene(eqx.Module):
             raise ValueError(f"dt = {self.dt!r} is invalid: expected a float > 0 [s].")
 
     @property
+    def recipe(self):
+        """The recipe of the scene's model (`jaxrod.registry.recipe(kind)`)."""
+        return recipe(self.kind)
+
+    @property
     def model_class(self):
-        """The class of the scene's model (`jaxrod.registry.model_class(kind)`)."""
-        return model_class(self.kind)
+        """The class of the scene's model (its recipe's `model_class`)."""
+        return self.recipe.model_class
 
     @property
     def F(self) -> Float[Array, ""]:
@@ -94,16 +94,16 @@ class Scene(eqx.Module):
         return theory.reference_load(self.rod) + self.dF
 
     def model(self):
-        """The model of `kind` at the load F and `size()` (`AbstractModel.for_scene`)."""
-        return self.model_class.for_scene(self.rod, self.F, self.size(), self.mode)
+        """The model of `kind` at the load F and `size()` (its recipe's `build`)."""
+        return self.recipe.build(self.rod, self.F, self.size(), self.mode)
 
     def size(self) -> int | None:
         """The model's static size (field nodes, Galerkin modes, 3D segments; `None`: one mode):
-        `n`, or the model's `default_size` at the (concrete) load under the perturbation."""
+        `n`, or the recipe's `default_size` at the (concrete) load under the perturbation."""
         if self.n is not None:
             return self.n
         try:
-            return self.model_class.default_size(self.rod, self.F, self.perturbation)
+            return self.recipe.default_size(self.rod, self.F, self.perturbation)
         except jax.errors.ConcretizationTypeError:
             raise ValueError(
                 "Scene.n must be given explicitly when the load is traced (e.g. vmapped over "
@@ -121,8 +121,8 @@ class Scene(eqx.Module):
         return grid, ProjectedVerlet(step)
 
     def step(self) -> float:
-        """The fixed step [s], static, from the rod's concrete values: `dt`, or the model's
-        `scene_step` (the reduced rod models: 0.4 of the stability limit at ΔF = 0 and at most
+        """The fixed step [s], static, from the rod's concrete values: `dt`, or the recipe's
+        `step` (the reduced rod models: 0.4 of the stability limit at ΔF = 0 and at most
         0.25/λ_max; the single mode 1e-4 s; the 3D rod its scheme's default step)."""
         if self.dt is not None:
             return float(self.dt)
@@ -137,16 +137,16 @@ class Scene(eqx.Module):
                 raise ValueError(f"Scene.dt must be given explicitly for the {self.kind} model when the rod or the "
                                  "load is traced: the step is a static setting.") from None
 
-        return self.model().scene_step(self.rod, self.F, scheme_step)
+        return self.recipe.step(self.model(), self.rod, self.F, scheme_step)
 
     def scheme(self) -> str | None:
         """The scheme of the scene's runs (a key of `jaxrod.integrators.SCHEMES`; `None`: the
-        model's own): the model's `scheme_under` the perturbation and the load (the 3D rod runs its
+        model's own): the recipe's `scheme_under` the perturbation and the load (the 3D rod runs its
         implicit default only under a perturbation measured adequate for it, `implicit_3d`, and
         below the wall's wrinkling load)."""
         if self.scheme_key is not None:
             return self.scheme_key
-        return self.model_class.scheme_under(self.perturbation, self.rod, self.F)
+        return self.recipe.scheme_under(self.perturbation, self.rod, self.F)
 
     def integrator(self) -> AbstractFixedStep:
         """The run's integrator: the scene's scheme (`scheme`; `jaxrod.integrators.default_for`)
@@ -154,8 +154,8 @@ class Scene(eqx.Module):
         return default_for(self.model(), self.step(), self.scheme())
 
     def initial_state(self):
-        """(q₀, v₀) in the model's coordinates (`AbstractModel.initial_state_under`)."""
-        return self.model().initial_state_under(self.perturbation, self.integrator(), self._grid)
+        """(q₀, v₀) in the model's coordinates (the recipe's `initial_state`)."""
+        return self.recipe.initial_state(self.model(), self.perturbation, self.integrator(), self._grid)
 
     def run(self, t1: float = DEFAULT_T1, n_save: int = 201, save_state: bool = True, throw: bool = False):
         """Simulate the scene to `t1` [s]; returns a [`jaxrod.Solution`][]. The run stops when
@@ -169,13 +169,13 @@ class Scene(eqx.Module):
 
     def field_of(self, q):
         """θ on a grid of nodes for plots: (s [m], θ [rad]) from the model's coordinates."""
-        return self.model().field_of(q)
+        return self.recipe.field_of(self.model(), q)
 
     def dominant_mode(self, q):
         """The dominant sine mode of the state `q` (the model's own mode for one mode)."""
-        return self.model().dominant_mode(q)
+        return self.recipe.dominant_mode(self.model(), q)
 
 
 def scheme_for(kind: str, perturbation) -> str | None:
     """The scheme of a run of the model registered as `kind` under `perturbation` (`Scene.scheme`)."""
-    return model_class(kind).scheme_under(perturbation)
+    return recipe(kind).scheme_under(perturbation)

@@ -11,7 +11,7 @@ import numpy as np
 from . import theory
 from .output import subplots, write_csv
 from .params import RodChannel
-from .registry import make_perturbation, model_class
+from .registry import make_perturbation, recipe
 from .sweeps import SweepResult, SweepSpec, sweep
 
 __all__ = ["stability_map", "grid_boundary", "fit_power_law", "plot_maps"]
@@ -98,7 +98,7 @@ def stability_map(
     main = jax.process_index() == 0
     progress = progress and main
     if t1 is None:  # the horizon a boundary search of this model runs to (2 s; the 3D rod 0.4 s)
-        t1 = model_class(model).search_horizon
+        t1 = recipe(model).search_horizon
     dF = np.asarray(dF, float)
     v0 = np.asarray(v0, float)
     results = {}
@@ -108,7 +108,7 @@ def stability_map(
         res = _map_sweep(float(mu), dF, v0, model, n, mode, t1, path, progress, chunk_size)
         results[mu] = res
         summary["maps"][f"{mu:g}"] = _summarise(res, dF, v0, float(mu))
-        if curve_rtol is not None and mu > 0 and model_class(model).search_method == "departure":
+        if curve_rtol is not None and mu > 0 and recipe(model).search_method == "departure":
             summary["maps"][f"{mu:g}"].update(_searched(res, dF, float(mu), model, mode, t1, curve_rtol, progress))
     summary["n"] = results[mus[0]].meta["n"]
     summary["dt"] = results[mus[0]].meta["dt"]
@@ -129,7 +129,7 @@ def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size) -> Sw
     (the model's default at the map's largest load), joined in column order; the later groups'
     folders are `path` + `_dF<first load>`. `meta["schemes"]`: each group's first and last load
     [N], scheme and step [s]."""
-    cls = model_class(model)
+    cls = recipe(model)
     rod = RodChannel.reference(mu=mu)
     F0 = float(theory.reference_load(rod))
     pert = make_perturbation("sine", 1.0, mode)

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import jaxrod as jr
-from jaxrod.models.dof import AbstractDOFModel
 from jaxrod.modal import sine_basis
 from jaxrod.perturbations import RandomForce, SineVelocity
-from jaxrod.rod3d import Rod3D
+from jaxrod.models.field import FieldRecipe
+from jaxrod.rod3d import Rod3D, Rod3DRecipe
 from jaxrod.sweeps import SweepSpec, sweep
 
 ROD = jr.RodChannel.reference(mu=0.3)
@@ -89,9 +89,9 @@ def test_field_energy_breakdown_names_its_terms_and_gravity_is_half_w_r_theta_sq
 
 
 def test_3d_rod_runs_leapfrog_under_a_perturbation_not_measured_for_its_implicit_scheme():
-    assert Rod3D.scheme_under(SineVelocity(0.01)) is None  # implicit_3d: its own implicit default
+    assert Rod3DRecipe().scheme_under(SineVelocity(0.01)) is None  # implicit_3d: its own implicit default
     assert not RandomForce.implicit_3d
-    assert Rod3D.scheme_under(RandomForce.from_settings(1.0, 6, jax.random.key(0), 1e-3)) == "leapfrog"
+    assert Rod3DRecipe().scheme_under(RandomForce.from_settings(1.0, 6, jax.random.key(0), 1e-3)) == "leapfrog"
     # and its scene steps at that scheme's default step (half the explicit limit), not the implicit one
     from jaxrod.integrators import default_step
 
@@ -102,8 +102,9 @@ def test_3d_rod_runs_leapfrog_under_a_perturbation_not_measured_for_its_implicit
 
 
 def test_a_model_without_nodes_is_budgeted_as_one_node():
-    assert AbstractDOFModel.bytes_per_member(None) == AbstractDOFModel.bytes_per_member(1)
-    assert AbstractDOFModel.bytes_per_member(2) > AbstractDOFModel.bytes_per_member(1)
+    recipe = FieldRecipe()  # the recipes' default budget
+    assert recipe.bytes_per_member(None) == recipe.bytes_per_member(1)
+    assert recipe.bytes_per_member(2) > recipe.bytes_per_member(1)
 
 
 def test_galerkin_from_rod_names_the_two_load_arguments_it_needs_one_of():

@@ -17,7 +17,7 @@ from jaxrod.integrators import ImplicitLeapfrog, ProjectedLeapfrog, ProjectedVer
 from jaxrod.integrators.exact import Exact
 from jaxrod.integrators.explicit import SplitLinearFriction, SymplecticEuler
 from jaxrod.lockup import closed_forms, laws, push, staircase, verdict
-from jaxrod.models.field import FieldModel
+from jaxrod.models.field import FieldModel, FieldRecipe
 from jaxrod.models.galerkin import GalerkinModel
 from jaxrod.models.single_mode import SingleMode
 from jaxrod.perturbations import UserState, scene_noise
@@ -103,14 +103,22 @@ def test_registry_rejects_bad_names_and_classes_naming_them():
     class NotAModel:
         pass
 
-    _raises_exactly(ValueError, lambda: registry.register_model(" padded", FieldModel),
+    class NotARecipe(FieldRecipe):
+        model_class = NotAModel
+
+    _raises_exactly(ValueError, lambda: registry.register_model(" padded", FieldRecipe()),
                     "model name = ' padded' is invalid: expected a non-empty string without spaces.")
     _raises_exactly(ValueError, lambda: registry.register_perturbation("", UserState),
                     "perturbation name = '' is invalid: expected a non-empty string without spaces.")
     _raises_exactly(TypeError, lambda: registry.register_model("m", 3),
-                    "model 'm': expected a class, got 3.")
-    _raises_exactly(TypeError, lambda: registry.register_model("m", NotAModel),
-                    "model 'm': NotAModel is not a subclass of jaxrod.AbstractModel.")
+                    "model 'm': expected an AbstractRecipe instance (the model's recipe), got 3.")
+    _raises_exactly(TypeError, lambda: registry.register_model("m", FieldModel),
+                    "model 'm': FieldModel is a model class; register its recipe, an AbstractRecipe instance "
+                    "(docs/extending.md).")
+    _raises_exactly(TypeError, lambda: registry.register_model("m", NotARecipe()),
+                    "model 'm': NotARecipe.model_class = NotAModel is not a subclass of jaxrod.AbstractModel.")
+    _raises_exactly(TypeError, lambda: registry.register_perturbation("p", 3),
+                    "perturbation 'p': expected a class, got 3.")
     _raises_exactly(TypeError, lambda: registry.register_perturbation("p", NotAModel),
                     "perturbation 'p': NotAModel is not a subclass of AbstractPerturbation.")
     _raises_exactly(ValueError, lambda: SweepSpec(model="nope"),
@@ -178,14 +186,11 @@ def test_models_accept_the_smallest_size_their_range_allows(make, size, smallest
     assert size(make(smallest)) == smallest
 
 
-def test_models_without_sample_points_or_scene_say_which_and_why():
+def test_models_without_sample_points_say_which_and_why():
     single = SingleMode(k=1.0, f_s=1.0, f_d=1.0)
     _raises_exactly(TypeError, single.sample_points,
                     "SingleMode takes no field perturbation: it has no sample points (for SingleMode use "
                     "jaxrod.perturbations.project_to_mode).")
-    forced = type(_field().under_lateral_force(jnp.zeros(6)))
-    _raises_exactly(TypeError, lambda: forced.for_scene(_rod(), 1.0, 8, 6),
-                    "a forced model is made by under_lateral_force, not by a scene.")
 
 
 INTEGRATORS = {

@@ -22,21 +22,17 @@ from jaxrod import registry, theory
 from jaxrod.cli import main
 from jaxrod.modal import dominant_mode
 from jaxrod.models.dof import AbstractDOFModel
+from jaxrod.models.recipe import AbstractRecipe
 from jaxrod.perturbations import AbstractPerturbation
 
 
 class Beads(AbstractDOFModel):
     """`n` uncoupled beads at the nodes s_j = jL/(n + 1), each `Ä = −k A − f sgn(Ȧ)` with k of
-    sine mode `mode` (P3) and f = μN/(ρR) [rad/s²]."""
+    sine mode `mode` (P3) and f = μN/(ρR) [rad/s²]. The physics only: six methods."""
 
     rod: jr.RodChannel
     k: jnp.ndarray
     n: int = eqx.field(static=True)
-
-    size_name: ClassVar[str] = "beads"
-    min_size: ClassVar[int] = 1
-    search_method: ClassVar[str] = "departure"
-    size = property(lambda self: self.n)
 
     def acceleration(self, q, t):
         return -self.k * q
@@ -54,27 +50,32 @@ class Beads(AbstractDOFModel):
     def max_frequency(self, q=None):
         return jnp.sqrt(jnp.maximum(self.k, 0.0))
 
-    def linear_flow(self, q, v, t, h):
-        raise NotImplementedError
-
     def sample_points(self):
         return jnp.arange(1, self.n + 1, dtype=self.rod.L.dtype) * self.rod.L / (self.n + 1)
 
-    @classmethod
-    def for_scene(cls, rod, F, size, mode):
-        return cls(rod, theory.stiffness(rod, mode, F), size)
 
-    @classmethod
-    def default_size(cls, rod, F, perturbation):
+class BeadsRecipe(AbstractRecipe):
+    """How a problem is posed for `Beads`: built at the load's modal stiffness, 8 beads unless
+    given, 1e-4 s steps, boundary searches by the departure rate, read as a field at the beads."""
+
+    model_class: ClassVar[type] = Beads
+    size_name: ClassVar[str] = "beads"
+    min_size: ClassVar[int] = 1
+    search_method: ClassVar[str] = "departure"
+
+    def build(self, rod, F, size, mode):
+        return Beads(rod, theory.stiffness(rod, mode, F), size)
+
+    def default_size(self, rod, F, perturbation):
         return 8
 
-    def scene_step(self, rod, F, scheme_step):
+    def step(self, model, rod, F, scheme_step):
         return 1e-4
 
-    def field_of(self, q):
-        return self.sample_points(), q
+    def field_of(self, model, q):
+        return model.sample_points(), q
 
-    def dominant_mode(self, q):
+    def dominant_mode(self, model, q):
         return dominant_mode(q)
 
 
@@ -94,7 +95,7 @@ class UniformVelocity(AbstractPerturbation):
 
 @pytest.fixture(scope="module")
 def registered():
-    registry.register_model("beads", Beads)
+    registry.register_model("beads", BeadsRecipe())
     registry.register_perturbation("uniform-velocity", UniformVelocity)
     yield
     registry._MODELS.pop("beads")

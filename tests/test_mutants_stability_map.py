@@ -378,7 +378,7 @@ def test_rod3d_map_runs_the_columns_past_the_wrinkling_load_with_the_explicit_sc
     out = str(tmp_path / "m")
     dF, v0 = np.array([20.0, 40.0, 49.6, 64.0]), np.array([0.01, 0.1])
     res = sm._map_sweep(0.3, dF, v0, "rod3d", None, 6, 0.4, out, False, None)
-    n = sm.model_class("rod3d").default_size(jr.RodChannel.reference(0.3), 1.3080612552531 + 64.0,
+    n = sm.recipe("rod3d").default_size(jr.RodChannel.reference(0.3), 1.3080612552531 + 64.0,
                                              sm.make_perturbation("sine", 1.0, 6))
     assert calls == [(n, [20.0, 40.0], out), (n, [49.6, 64.0], out + "_dF49.6")]
     assert res.shape == (4, 2) and res.inputs["index"].tolist() == list(range(8))

@@ -312,13 +312,13 @@ def test_expanding_bisection_reports_failures_in_its_result():
 
 
 def test_a_curve_of_the_3d_rod_runs_to_its_search_horizon(monkeypatch):
-    """`boundary_curve` without `t1` runs the 3D rod's labels to `Rod3D.search_horizon` (0.4 s, the
+    """`boundary_curve` without `t1` runs the 3D rod's labels to its recipe's `search_horizon` (0.4 s, the
     horizon its E3 brackets were checked at against 2 s) and a given `t1` as given."""
     from jaxrod.boundary import curves
-    from jaxrod.rod3d import Rod3D
+    from jaxrod.rod3d import Rod3DRecipe
 
     seen = []
     monkeypatch.setattr(curves, "_seeded_bisection", lambda *a, **kw: seen.append(kw["t1"]))
     bd.boundary_curve(ROD, [5.0], model="rod3d")
     bd.boundary_curve(ROD, [5.0], model="rod3d", t1=1.5)
-    assert seen == [Rod3D.search_horizon, 1.5] and Rod3D.search_horizon == 0.4
+    assert seen == [Rod3DRecipe.search_horizon, 1.5] and Rod3DRecipe.search_horizon == 0.4

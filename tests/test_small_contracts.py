@@ -5,6 +5,8 @@ threshold of E1's field ramp, and the lock-up closed forms' name for a bad μ.""
 
 from __future__ import annotations
 
+import importlib
+import inspect
 import math
 
 import equinox as eqx
@@ -376,7 +378,8 @@ def test_every_reduced_model_draws_its_state_as_theta_of_s(kind, size):
     amplitude, or the nodes' values of A sin(6πs/L)), θ = A sin(6πs/L) at every point it returns
     (inside [0, L]), for a batch of states too."""
     rod = jr.RodChannel.reference(0.3)
-    model = jr.Scene(rod, 5.0, jr.SineVelocity(0.01, 6.0), kind, n=size).model()
+    scene = jr.Scene(rod, 5.0, jr.SineVelocity(0.01, 6.0), kind, n=size)
+    model, recipe = scene.model(), scene.recipe
     L, A = float(rod.L), 0.02
     if kind == "mode":
         q = jnp.asarray(A)
@@ -384,20 +387,22 @@ def test_every_reduced_model_draws_its_state_as_theta_of_s(kind, size):
         q = jnp.zeros(size).at[5].set(A)
     else:
         q = A * jnp.sin(6 * jnp.pi * jnp.arange(1.0, size + 1) / (size + 1))
-    s, th = (np.asarray(a) for a in model.field_of(q))
+    s, th = (np.asarray(a) for a in recipe.field_of(model, q))
     assert s.ndim == 1 and th.shape == s.shape
     assert s.size >= size if size else s.size > 100  # the nodes or quadrature points; 129 points for one mode
     assert 0.0 <= s.min() and s.max() <= L and np.all(np.diff(s) > 0)
     np.testing.assert_allclose(th, A * np.sin(6 * np.pi * s / L), atol=1e-12)
-    _, both = model.field_of(jnp.stack([q, 2 * q]))
+    _, both = recipe.field_of(model, jnp.stack([q, 2 * q]))
     np.testing.assert_allclose(np.asarray(both), [th, 2 * th], atol=1e-12)
 
 
 def test_the_3d_rod_draws_its_state_as_its_nodes_wall_angles(rod3d_state):
+    from jaxrod.rod3d import Rod3DRecipe
+
     model, q, v = rod3d_state
     off = 0.5 * float(model.rod.R) * jnp.sin(jnp.pi * jnp.arange(7.0) / 6)
     q2, _ = model.initial_state(0.0, lateral_offset=off)
-    s, th = model.field_of(q2)
+    s, th = Rod3DRecipe().field_of(model, q2)
     np.testing.assert_allclose(np.asarray(s), np.linspace(0.0, float(model.rod.L), 7), atol=1e-15)
     np.testing.assert_array_equal(np.asarray(th), np.asarray(model.theta(q2.x)))
     assert float(jnp.max(jnp.abs(th))) > 0.1
@@ -499,14 +504,14 @@ def test_the_3d_rods_tangent_model_runs_its_friction_pass_in_float64_and_is_othe
 
 
 def test_the_scheme_of_a_scene_is_its_models_choice_under_the_perturbation():
-    from jaxrod.rod3d import Rod3D
+    from jaxrod.rod3d import Rod3DRecipe
     from jaxrod.scene import scheme_for
 
     sine = jr.SineVelocity(0.01, 6.0)
-    assert scheme_for("rod3d", sine) == Rod3D.scheme_under(sine)
+    assert scheme_for("rod3d", sine) == Rod3DRecipe().scheme_under(sine) is None
     assert scheme_for("field", sine) is None and scheme_for("mode", sine) is None
     noise = jr.RandomVelocity(0.015, jax.random.key(0))
-    assert scheme_for("rod3d", noise) == Rod3D.scheme_under(noise)
+    assert scheme_for("rod3d", noise) == Rod3DRecipe().scheme_under(noise) == "leapfrog"
 
 
 @pytest.mark.parametrize("module", ["jaxrod", "jaxrod.integrators"])
@@ -747,7 +752,12 @@ def test_a_physical_number_given_as_an_int_is_a_float_leaf_and_an_unknown_result
     from jaxrod._numerics import float_leaf
     from jaxrod._results import RESULTS
 
-    for x in (3, [1, 2], np.int32(7)):
+    for x in (3, [1, 2], np.int32(7), True, 2.5):
         assert float_leaf(x).dtype == jnp.dtype("float64")
+        assert not float_leaf(x).weak_type  # a Python number does not follow another operand's precision
+    assert float_leaf(jnp.ones(2, jnp.float32)).dtype == jnp.dtype("float32")  # a floating array keeps its dtype
+    for module in ("params", "perturbations", "scene", "loads", "theory", "models.single_mode", "lockup.closed_forms"):
+        source = inspect.getsource(importlib.import_module(f"jaxrod.{module}"))
+        assert "isinstance(x, (int, float))" not in source, f"jaxrod.{module} writes its own float converter"
     assert RESULTS.describe(99) == "unknown result code 99"
     assert RESULTS.describe(jnp.asarray(RESULTS.successful)) == RESULTS.messages[RESULTS.successful]

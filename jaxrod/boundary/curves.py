@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import theory
-from ..registry import make_perturbation, model_class
+from ..registry import make_perturbation, recipe
 from ..scene import Scene
 from .indicators import departure_sensitivities
 from .roots import expanding_bisection
@@ -111,7 +111,7 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
 
     dFs = np.asarray(dFs, float)
     if t1 is None:
-        t1 = model_class(model).search_horizon
+        t1 = recipe(model).search_horizon
     kw = dict(model=model, mode=mode, rtol=rtol, max_iter=max_iter, t1=t1, method=method,
               sensitivities=sensitivities)
     if continuation and _method_of(method, model) == "bisection" and model != "field":

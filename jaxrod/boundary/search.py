@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 
 from .. import theory
-from ..registry import make_perturbation, model_class, perturbation_class
+from ..registry import make_perturbation, perturbation_class, recipe
 from ..scene import Scene
 from .indicators import crossing_state, departure_rate, departure_sensitivities, single_mode_indicator
 from .roots import bisection, departure_secant, implicit_sensitivities, safeguarded_newton
@@ -70,7 +70,7 @@ def _method_of(method, model, perturbation="sine"):
     The 3D rod's departure rate (on the node positions, `Rod3D.translation`, tangents in float64:
     `for_tangents`; roots confirmed by a stable run, `departure_secant`) is opt-in: it compiles
     longer than bisection saves (benchmarks/README.md, boundary_cost.py)."""
-    cls = model_class(model)
+    cls = recipe(model)
     if cls.search_method == "exact" and perturbation_class(perturbation).projects_exactly:
         return "exact"
     if method is None:
@@ -83,7 +83,7 @@ def _method_of(method, model, perturbation="sine"):
 def _confirms(model) -> bool:
     """Whether a departure-rate search confirms its root with a stable run: for a model whose
     default search is not the departure rate (the 3D rod's is not linear near its root)."""
-    return model_class(model).search_method != "departure"
+    return recipe(model).search_method != "departure"
 
 
 def _named(res):
@@ -204,7 +204,7 @@ def _critical(rod, known: dict, point, lo, hi, start, rtol, atol, geometric, lam
     (ΔF, amplitude) of a run; the single mode's closed form (`"exact"`) or runs of scenes at the
     static resolution of the load `size_load`. **Returns:** `(RootResult, sensitivities)` in x."""
     x_of, back = variable
-    t1 = model_class(model).search_horizon if t1 is None else t1
+    t1 = recipe(model).search_horizon if t1 is None else t1
     key = jax.random.key(0) if key is None else key
     method = _method_of(method, model, perturbation)
     rod_of = lambda p: _rod_of(type(rod), p)
@@ -215,7 +215,7 @@ def _critical(rod, known: dict, point, lo, hi, start, rtol, atol, geometric, lam
         def g2(x, p):
             r = rod_of(p)
             dF, amplitude = point(x, p)
-            m = model_class(model).for_scene(r, theory.reference_load(r) + dF, None, mode)
+            m = recipe(model).build(r, theory.reference_load(r) + dF, None, mode)
             return single_mode_indicator(amplitude / r.R, m.k, m.f_s, m.f_d, horizon=horizon)
 
         res = _named(back(safeguarded_newton(lambda y: g2(x_of(y), params), lo, hi, rtol, max_iter,

@@ -21,10 +21,10 @@ def check_args(args) -> None:
     check = getattr(args, "check", None)
     if check is not None:
         check(args)
-    from ..registry import model_class, model_names
+    from ..registry import model_names, recipe
 
     if getattr(args, "n", None) is not None and getattr(args, "model", None) in model_names():
-        cls = model_class(args.model)  # the smallest resolution: the model's own (`min_size`, `size_name`)
+        cls = recipe(args.model)  # the smallest resolution: the model's own (`min_size`, `size_name`)
         if cls.size_name is None:
             _fail(f"argument --n: the {args.model} model has no size; leave --n out.")
         if args.n < cls.min_size:

@@ -23,12 +23,12 @@ def _cmd_boundary(args) -> int:
     from ..boundary import ROOT_RESULTS
     from ..stability_map import fit_power_law, theory_boundary
 
-    from ..registry import model_class
+    from ..registry import recipe
 
     rod = _rod_from_args(args, args.mu)  # --mu, --dF, --n, --t1 and --method were checked by cli._checks
     # the sensitivities come with the departure rate's tangent runs; label bisection (the 3D rod)
     # would need a forward-mode run more per load, which compiles longer than the search: opt-in
-    by_labels = (args.method or model_class(args.model).search_method) == "bisection"
+    by_labels = (args.method or recipe(args.model).search_method) == "bisection"
     wanted = ("mu", "dF") if args.sensitivities or not by_labels else ()
     try:
         res, sens = bd.boundary_curve(rod, args.dF, model=args.model, n=args.n, bracket=(1e-5, 2.0), rtol=args.rtol,

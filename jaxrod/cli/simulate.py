@@ -84,7 +84,7 @@ def _simulate_rod3d(args, rod) -> int:
     from .._results import RESULTS
     from ..integrators.base import save_grid
     from ..modal import dominant_mode
-    from ..rod3d import Rod3D, sine_velocity
+    from ..rod3d import Rod3D, Rod3DRecipe, sine_velocity
     from ..experiments.rod3d import run
 
     args.control = args.control or "force"  # the defaults (checked by cli._checks: rod3d only)
@@ -104,7 +104,7 @@ def _simulate_rod3d(args, rod) -> int:
         model, scheme = scene.model(), scene.scheme()
     else:  # held ends after a pre-compression, or a pushed end: the 3D rod's own controls
         model = Rod3D(rod, n, control=args.control, speed=args.speed, preload=F if args.control == "force" else 0.0)
-        scheme = Rod3D.scheme_under(pert, rod, F)  # the implicit default under a sine velocity below the wrinkling load
+        scheme = Rod3DRecipe().scheme_under(pert, rod, F)  # the implicit default under a sine velocity below the wrinkling load
     limit = float(default_for(model, 1.0, scheme).step_limit(model))
     if args.dt is not None and not (0 < args.dt < limit):
         _fail(f"argument --dt: {args.dt!r} s is invalid: the step limit of this rod's scheme is {limit:.4g} s; "

@@ -1,11 +1,9 @@
-"""The interface every model implements: what the integrators, the perturbations and the scenes
+"""The interface every model implements: what the integrators, the engine and the perturbations
 ask of a model. Every method is abstract; the shared per-degree-of-freedom machinery of the
-reduced models is in [`jaxrod.models.dof.AbstractDOFModel`][]."""
+reduced models is in [`jaxrod.models.dof.AbstractDOFModel`][], and how a problem is posed for a
+model is its recipe's ([`jaxrod.models.recipe`][])."""
 
 from __future__ import annotations
-
-from collections.abc import Callable
-from typing import ClassVar
 
 import abc
 
@@ -22,9 +20,10 @@ class AbstractModel(eqx.Module):
     read it.
 
     Integrators use only the methods of the first groups below, so any model that implements
-    them runs with every integrator; scenes, sweeps, boundary searches and the command line use
-    the scene group, so a model that implements it (and is registered by name with
-    [`jaxrod.registry.register_model`][]) runs through all of them. `acceleration` and the
+    them runs with every integrator; how a problem is posed for the model (its size, step,
+    scheme, initial state, search) is its recipe's ([`jaxrod.models.recipe.AbstractRecipe`][]),
+    registered with the model's name ([`jaxrod.registry.register_model`][]), so that scenes,
+    sweeps, boundary searches and the command line run it. `acceleration` and the
     friction bounds are in the model's coordinates with the mass scaled out; energies are in the
     model's energy unit (J for the rod models).
     """
@@ -63,10 +62,10 @@ class AbstractModel(eqx.Module):
         """The highest angular frequency of the conservative part [rad/s] (at `q` where it
         depends on the state); a fixed-step explicit scheme is stable for `dt · max_frequency < 2`."""
 
-    @abc.abstractmethod
     def linear_flow(self, q, v, t, h):
         """Exact flow of the conservative (linear) part over `h` [s] (only the documented
-        failure case [`jaxrod.SplitLinearFriction`][] needs it; raise where there is none)."""
+        failure case [`jaxrod.SplitLinearFriction`][] needs it; by default there is none)."""
+        raise NotImplementedError(f"{type(self).__name__} has no exact linear flow (SplitLinearFriction needs one).")
 
     @abc.abstractmethod
     def check(self) -> Bool[Array, ""]:
@@ -155,68 +154,6 @@ class AbstractModel(eqx.Module):
     @abc.abstractmethod
     def for_tangents(self) -> AbstractModel:
         """This model as forward-mode derivatives of its runs need it."""
-
-    # -- the scene: how a model of a rod is built, stepped and read ------------------------------
-
-    # the name of the static size (`"nodes"`, `"modes"`, `"segments"`; `None`: no size) and its
-    # least valid value
-    size_name: eqx.AbstractClassVar[str | None]
-    min_size: eqx.AbstractClassVar[int]
-    # how a boundary search finds its root: `"exact"` (the closed form, sine perturbations),
-    # `"departure"` (the departure rate) or `"bisection"` (on the label)
-    search_method: eqx.AbstractClassVar[str]
-    # the horizon of a critical-velocity search's runs [s] (sine velocity): a run that neither sticks
-    # nor buckles by then counts as stable (the default of `critical_velocity` and `boundary_curve`; not
-    # abstract; `critical_load` keeps 2 s)
-    search_horizon: ClassVar[float] = 2.0
-    # lanes of a sweep's continuous batch (`jaxrod.sweep`; `None`: the batching default)
-    sweep_lanes: eqx.AbstractClassVar[int | None]
-
-    @classmethod
-    @abc.abstractmethod
-    def for_scene(cls, rod, F, size: int | None, mode: int) -> AbstractModel:
-        """The model of `rod` under the axial load `F` [N] at the static `size` (sine `mode` for
-        the models that need one)."""
-
-    @classmethod
-    @abc.abstractmethod
-    def default_size(cls, rod, F, perturbation) -> int | None:
-        """The size a scene of `rod` at the concrete load `F` [N] under `perturbation` uses
-        when none is given."""
-
-    @classmethod
-    @abc.abstractmethod
-    def scheme_under(cls, perturbation, rod=None, F=None) -> str | None:
-        """The scheme (a key of `jaxrod.integrators.SCHEMES`) of a run under `perturbation`, of
-        `rod` under the axial load `F` [N] where they are given; `None`: the model's own."""
-
-    @classmethod
-    @abc.abstractmethod
-    def bytes_per_member(cls, size: int | None) -> int:
-        """Memory one member of a batch of this model holds [bytes] (the sweeps size chunks by it)."""
-
-    @property
-    @abc.abstractmethod
-    def size(self) -> int | None:
-        """The static size (nodes, modes, segments; `None` for none)."""
-
-    @abc.abstractmethod
-    def scene_step(self, rod, F, scheme_step: Callable[[AbstractModel], float]) -> float:
-        """The fixed step [s] of a scene's run, from concrete values (`scheme_step(model)`: the
-        default step of the run's scheme, `jaxrod.integrators.default_step`)."""
-
-    @abc.abstractmethod
-    def initial_state_under(self, perturbation, integrator, grid: Callable[[], tuple]):
-        """(q₀, v₀) in the model's coordinates under `perturbation` (`grid()`: a field model and
-        its integrator, for models that take no field and get the perturbation projected)."""
-
-    @abc.abstractmethod
-    def field_of(self, q) -> tuple[Float[Array, " k"], Float[Array, "... k"]]:
-        """θ on a grid for plots: (s [m], θ [rad]) from the state `q` (any leading axes)."""
-
-    @abc.abstractmethod
-    def dominant_mode(self, q):
-        """The dominant sine mode of the state `q` (any leading axes)."""
 
 
 def friction_work(model: AbstractModel, v_prev, v_trial, v_after):

@@ -1,8 +1,9 @@
 """The shared machinery of the models whose friction acts per degree of freedom (or per sample
 point of a field): [`AbstractDOFModel`][jaxrod.models.dof.AbstractDOFModel], the rod models with
 a rod and an axial load ([`AbstractRodDOFModel`][jaxrod.models.dof.AbstractRodDOFModel]: the
-field and Galerkin models), and the lateral force of a random position perturbation's forcing
-phase as a wrapper that forwards the whole interface."""
+field and Galerkin models) with their recipe ([`RodDOFRecipe`][jaxrod.models.dof.RodDOFRecipe]),
+and the lateral force of a random position perturbation's forcing phase as a wrapper that
+forwards the whole interface."""
 
 from __future__ import annotations
 
@@ -20,8 +21,9 @@ from .. import theory
 from ..loads import AbstractLoad
 from ..params import RodChannel
 from .base import AbstractModel, friction_work
+from .recipe import AbstractRecipe
 
-__all__ = ["AbstractDOFModel", "AbstractRodDOFModel", "DT_FRACTION", "GROWTH_FRACTION", "static_float"]
+__all__ = ["AbstractDOFModel", "AbstractRodDOFModel", "RodDOFRecipe", "DT_FRACTION", "GROWTH_FRACTION", "static_float"]
 
 DT_FRACTION = 0.4  # a scene's step: this fraction of the explicit step limit 2/ω_max at ΔF = 0
 GROWTH_FRACTION = 0.25  # ... and at most this fraction of 1/λ_max, the loaded rod's fastest growth
@@ -42,7 +44,6 @@ class AbstractDOFModel(AbstractModel):
 
     held_is_fixed: ClassVar[bool] = True
     scheme: ClassVar[str] = "verlet"
-    sweep_lanes: ClassVar[int | None] = None
 
     # -- the step ---------------------------------------------------------------------------------
 
@@ -133,20 +134,6 @@ class AbstractDOFModel(AbstractModel):
     def for_tangents(self) -> AbstractModel:
         return self
 
-    # -- the scene ---------------------------------------------------------------------------------
-
-    @classmethod
-    def scheme_under(cls, perturbation, rod=None, F=None) -> str | None:
-        return None
-
-    @classmethod
-    def bytes_per_member(cls, size: int | None) -> int:
-        """State, velocity, acceleration, trial velocities, stencil temporaries, per-save records."""
-        return 8 * (24 * (size or 1) + 64) + 4096
-
-    def initial_state_under(self, perturbation, integrator, grid):
-        return perturbation.initial_state(self, integrator)
-
 
 class AbstractRodDOFModel(AbstractDOFModel):
     """A reduced rod model of P1 with a rod and an axial load: friction μN/(ρR) at each sample
@@ -155,7 +142,6 @@ class AbstractRodDOFModel(AbstractDOFModel):
 
     rod: eqx.AbstractVar[RodChannel]
     load: eqx.AbstractVar[AbstractLoad]
-    search_method: ClassVar[str] = "departure"
 
     @abc.abstractmethod
     def wavenumbers_sq(self) -> Float[Array, " n"]:
@@ -193,28 +179,6 @@ class AbstractRodDOFModel(AbstractDOFModel):
         ok = (r.mu_s >= 0) & (r.mu_d >= 0) & (r.mu_d <= r.mu_s) & (r.R > 0) & (r.EI > 0)
         return ok & jnp.isfinite(self.load(0.0))
 
-    @classmethod
-    def for_scene(cls, rod, F, size, mode):
-        """`from_rod(rod, size, F=F)` (the sine `mode` is not needed: every mode is modelled)."""
-        return cls.from_rod(rod, size, F=F)
-
-    def scene_step(self, rod, F, scheme_step) -> float:
-        """`DT_FRACTION` of the stability limit 2/ω_max at ΔF = 0 (compression only lowers the
-        highest frequency) and, when the load is concrete, at most `GROWTH_FRACTION`/λ_max,
-        λ_max = F/(2√(EIρ)) the fastest growth rate of a loaded rod, so that fast-growing modes
-        stay resolved (benchmarks/README.md, field convergence)."""
-        unloaded = type(self).for_scene(rod, theory.reference_load(rod), self.size, 1)
-        omega = static_float(lambda: jnp.max(unloaded.max_frequency()),
-                        "Scene.dt must be given explicitly when the rod's stiffness parameters are traced "
-                        "(e.g. vmapped over EI, rho or R): the step is a static setting.")
-        dt = DT_FRACTION * 2.0 / omega
-        try:
-            with jax.ensure_compile_time_eval():
-                lam = float(F / (2 * jnp.sqrt(rod.EI * rod.rho)))
-        except jax.errors.ConcretizationTypeError:
-            return dt
-        return min(dt, GROWTH_FRACTION / lam) if lam > 0 else dt
-
 
 def _forward(name):
     return lambda self, *args, **kwargs: getattr(self.inner, name)(*args, **kwargs)
@@ -230,10 +194,6 @@ class _Forced(AbstractModel):
     # the class constants of every per-DOF model (`AbstractDOFModel`, the only models it wraps)
     held_is_fixed: ClassVar[bool] = True
     scheme: ClassVar[str] = "verlet"
-    size_name: ClassVar[None] = None
-    min_size: ClassVar[int] = 1
-    search_method: ClassVar[str] = "departure"
-    sweep_lanes: ClassVar[None] = None
 
     def acceleration(self, q, t):
         return self.inner.acceleration(q, t) + self.extra
@@ -251,26 +211,42 @@ class _Forced(AbstractModel):
     autonomous = property(lambda self: self.inner.autonomous)
     buckle_threshold = property(lambda self: self.inner.buckle_threshold)
     resolved_modes = property(lambda self: self.inner.resolved_modes)
-    size = property(lambda self: self.inner.size)
     (friction_bounds, energy_terms, kinetic_energy, max_frequency, linear_flow, check, kick, drift,
      friction_update, friction_acceleration, impulse_work, amplitude, is_stuck, stop_measures, observables,
-     sample_points, from_samples, perturbed_state, translation, scene_step, initial_state_under, field_of,
-     dominant_mode) = map(_forward, (
+     sample_points, from_samples, perturbed_state, translation) = map(_forward, (
         "friction_bounds", "energy_terms", "kinetic_energy", "max_frequency", "linear_flow", "check", "kick",
         "drift", "friction_update", "friction_acceleration", "impulse_work", "amplitude", "is_stuck",
-        "stop_measures", "observables", "sample_points", "from_samples", "perturbed_state", "translation",
-        "scene_step", "initial_state_under", "field_of", "dominant_mode"))
+        "stop_measures", "observables", "sample_points", "from_samples", "perturbed_state", "translation"))
 
-    @classmethod
-    def for_scene(cls, rod, F, size, mode):
-        raise TypeError("a forced model is made by under_lateral_force, not by a scene.")
 
-    default_size = for_scene
+class RodDOFRecipe(AbstractRecipe):
+    """The recipe of a reduced rod model (`AbstractRodDOFModel`: field, Galerkin): built by
+    `from_rod` at the load, searched by the departure rate, stepped at `DT_FRACTION` of its
+    stability limit."""
 
-    @classmethod
-    def scheme_under(cls, perturbation, rod=None, F=None):
-        return None
+    search_method: ClassVar[str] = "departure"
 
-    @classmethod
-    def bytes_per_member(cls, size):
-        return AbstractDOFModel.bytes_per_member(size)
+    @abc.abstractmethod
+    def size_of(self, model) -> int:
+        """The model's static size (nodes, modes)."""
+
+    def build(self, rod, F, size, mode):
+        """`from_rod(rod, size, F=F)` (the sine `mode` is not needed: every mode is modelled)."""
+        return self.model_class.from_rod(rod, size, F=F)
+
+    def step(self, model, rod, F, scheme_step) -> float:
+        """`DT_FRACTION` of the stability limit 2/ω_max at ΔF = 0 (compression only lowers the
+        highest frequency) and, when the load is concrete, at most `GROWTH_FRACTION`/λ_max,
+        λ_max = F/(2√(EIρ)) the fastest growth rate of a loaded rod, so that fast-growing modes
+        stay resolved (benchmarks/README.md, field convergence)."""
+        unloaded = self.build(rod, theory.reference_load(rod), self.size_of(model), 1)
+        omega = static_float(lambda: jnp.max(unloaded.max_frequency()),
+                        "Scene.dt must be given explicitly when the rod's stiffness parameters are traced "
+                        "(e.g. vmapped over EI, rho or R): the step is a static setting.")
+        dt = DT_FRACTION * 2.0 / omega
+        try:
+            with jax.ensure_compile_time_eval():
+                lam = float(F / (2 * jnp.sqrt(rod.EI * rod.rho)))
+        except jax.errors.ConcretizationTypeError:
+            return dt
+        return min(dt, GROWTH_FRACTION / lam) if lam > 0 else dt

@@ -14,10 +14,10 @@ from .. import theory
 from ..loads import AbstractLoad, as_load
 from ..modal import dominant_mode, sine_basis
 from ..params import RodChannel
-from .dof import AbstractRodDOFModel
+from .dof import AbstractRodDOFModel, RodDOFRecipe
 from .single_mode import _stumpff
 
-__all__ = ["FieldModel", "DEFAULT_NODES", "default_nodes"]
+__all__ = ["FieldModel", "FieldRecipe", "DEFAULT_NODES", "default_nodes"]
 
 DEFAULT_NODES = 128  # see benchmarks/README.md (field convergence) and `default_nodes`
 
@@ -188,20 +188,24 @@ class FieldModel(AbstractRodDOFModel):
         a, b = a * c0 + b * h * c1, b * c0 - k * a * h * c1
         return S @ a, S @ b
 
-    # -- the scene -----------------------------------------------------------------------------
 
+class FieldRecipe(RodDOFRecipe):
+    """The field model's recipe: `n` nodes, by default `default_nodes` of the load."""
+
+    model_class: ClassVar[type] = FieldModel
     size_name: ClassVar[str] = "nodes"
     min_size: ClassVar[int] = 4
-    size = property(lambda self: self.n_nodes)
 
-    @classmethod
-    def default_size(cls, rod, F, perturbation) -> int:
+    def size_of(self, model) -> int:
+        return model.n_nodes
+
+    def default_size(self, rod, F, perturbation) -> int:
         """`default_nodes` of the load, and at least the nodes the perturbation needs resolved
         (`AbstractPerturbation.least_nodes`)."""
         return max(default_nodes(rod, F), perturbation.least_nodes)
 
-    def field_of(self, q):
-        return self.sample_points(), q
+    def field_of(self, model, q):
+        return model.sample_points(), q
 
-    def dominant_mode(self, q):
+    def dominant_mode(self, model, q):
         return dominant_mode(q)

@@ -14,10 +14,10 @@ from jaxtyping import Array, ArrayLike, Float
 from .. import theory
 from ..loads import AbstractLoad, as_load
 from ..params import RodChannel
-from .dof import AbstractRodDOFModel
+from .dof import AbstractRodDOFModel, RodDOFRecipe
 from .single_mode import _stumpff
 
-__all__ = ["GalerkinModel", "DEFAULT_MODES"]
+__all__ = ["GalerkinModel", "GalerkinRecipe", "DEFAULT_MODES"]
 
 DEFAULT_MODES = 32  # a scene's Galerkin model
 
@@ -157,20 +157,24 @@ class GalerkinModel(AbstractRodDOFModel):
         c0, c1, _ = _stumpff(k * h**2)
         return q * c0 + v * h * c1, v * c0 - k * q * h * c1
 
-    # -- the scene -----------------------------------------------------------------------------
 
+class GalerkinRecipe(RodDOFRecipe):
+    """The Galerkin model's recipe: `DEFAULT_MODES` modes unless given."""
+
+    model_class: ClassVar[type] = GalerkinModel
     size_name: ClassVar[str] = "modes"
     min_size: ClassVar[int] = 1
-    size = property(lambda self: self.n_modes)
 
-    @classmethod
-    def default_size(cls, rod, F, perturbation) -> int:
+    def size_of(self, model) -> int:
+        return model.n_modes
+
+    def default_size(self, rod, F, perturbation) -> int:
         return DEFAULT_MODES
 
-    def field_of(self, q):
+    def field_of(self, model, q):
         """θ at the quadrature points (any leading axes of `q`)."""
-        return self.sample_points(), q @ self._phi().T
+        return model.sample_points(), q @ model._phi().T
 
-    def dominant_mode(self, q):
+    def dominant_mode(self, model, q):
         """The mode of the largest amplitude."""
         return jnp.argmax(jnp.abs(q), axis=-1) + 1

@@ -12,18 +12,13 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from .. import theory
+from .._numerics import float_leaf
 from .._results import RESULTS
 from ..params import RodChannel
 from .dof import AbstractDOFModel
+from .recipe import AbstractRecipe
 
-__all__ = ["SingleMode", "exact_solution"]
-
-
-def _arr(x):
-    if isinstance(x, (int, float)):  # Python scalars become strongly typed arrays
-        return jnp.asarray(x, dtype=jnp.result_type(float))
-    x = jnp.asarray(x)
-    return x if jnp.issubdtype(x.dtype, jnp.floating) else x.astype(jnp.result_type(float))
+__all__ = ["SingleMode", "SingleModeRecipe", "exact_solution"]
 
 
 class SingleMode(AbstractDOFModel):
@@ -46,9 +41,9 @@ class SingleMode(AbstractDOFModel):
     Build it from a rod with [`jaxrod.SingleMode.from_rod`][].
     """
 
-    k: Float[Array, ""] = eqx.field(converter=_arr)
-    f_s: Float[Array, ""] = eqx.field(converter=_arr)
-    f_d: Float[Array, ""] = eqx.field(converter=_arr)
+    k: Float[Array, ""] = eqx.field(converter=float_leaf)
+    f_s: Float[Array, ""] = eqx.field(converter=float_leaf)
+    f_d: Float[Array, ""] = eqx.field(converter=float_leaf)
     mode: int | None = eqx.field(static=True, default=None)
     rod: RodChannel | None = None
 
@@ -85,7 +80,7 @@ class SingleMode(AbstractDOFModel):
             raise ValueError("SingleMode.from_rod needs exactly one of F and dF.")
         m = theory.critical_mode(rod) if m is None else m
         if dF is not None:
-            F = theory.frictionless_load(rod, m) + _arr(dF)
+            F = theory.frictionless_load(rod, m) + float_leaf(dF)
         return cls(
             k=theory.stiffness(rod, m, F),
             f_s=theory.friction_amplitude(rod, rod.mu_s),
@@ -121,40 +116,6 @@ class SingleMode(AbstractDOFModel):
             & (self.f_d >= 0)
             & (self.f_d <= self.f_s)
         )
-
-
-    # -- the scene -----------------------------------------------------------------------------
-
-    size_name: ClassVar[None] = None
-    min_size: ClassVar[int] = 1
-    search_method: ClassVar[str] = "exact"  # Newton on the exact solution (`exact_solution`)
-    size = property(lambda self: None)
-    default_dt: ClassVar[float] = 1e-4  # a scene's step [s]
-
-    @classmethod
-    def for_scene(cls, rod, F, size, mode):
-        return cls.from_rod(rod, mode, F=F)
-
-    @classmethod
-    def default_size(cls, rod, F, perturbation) -> None:
-        return None
-
-    def scene_step(self, rod, F, scheme_step) -> float:
-        return self.default_dt
-
-    def initial_state_under(self, perturbation, integrator, grid):
-        """The perturbation projected onto the mode (`AbstractPerturbation.modal_state`; a field
-        perturbation is drawn on `grid()`'s field model first)."""
-        return perturbation.modal_state(self.mode, self.rod.R, grid)
-
-    def field_of(self, q):
-        """θ = A sin(mπs/L) on 129 points (any leading axes of `q`)."""
-        s = jnp.linspace(0.0, self.rod.L, 129)
-        shape = jnp.sin(self.mode * jnp.pi * s / self.rod.L)
-        return s, jnp.tensordot(jnp.asarray(q), shape, axes=0)  # the outer product, without rank promotion
-
-    def dominant_mode(self, q):
-        return jnp.full(jnp.shape(q), self.mode)
 
 
 # -- Closed-form pieces ------------------------------------------------------------------
@@ -247,7 +208,7 @@ def exact_solution(
 
     **Returns:** `(A, Adot, stuck, n_phases, result)` at time `t`.
     """
-    A0, Adot0, k, f_s, f_d, t = map(_arr, (A0, Adot0, k, f_s, f_d, t))
+    A0, Adot0, k, f_s, f_d, t = map(float_leaf, (A0, Adot0, k, f_s, f_d, t))
 
     def slip_direction(A, v):
         # From rest the mode slips towards the net elastic force -kA.
@@ -283,3 +244,37 @@ def exact_solution(
         RESULTS.max_steps,
     ).astype(jnp.int32)
     return A, v, stuck_now(A, v), n, result
+
+
+class SingleModeRecipe(AbstractRecipe):
+    """The single mode's recipe: mode `mode` of the scene, no size, 1e-4 s steps, the
+    perturbation projected onto the mode, boundary searches on the exact solution."""
+
+    model_class: ClassVar[type] = SingleMode
+    size_name: ClassVar[None] = None
+    min_size: ClassVar[int] = 1
+    search_method: ClassVar[str] = "exact"  # Newton on the exact solution (`exact_solution`)
+    default_dt: ClassVar[float] = 1e-4  # a scene's step [s]
+
+    def build(self, rod, F, size, mode):
+        return SingleMode.from_rod(rod, mode, F=F)
+
+    def default_size(self, rod, F, perturbation) -> None:
+        return None
+
+    def step(self, model, rod, F, scheme_step) -> float:
+        return self.default_dt
+
+    def initial_state(self, model, perturbation, integrator, grid):
+        """The perturbation projected onto the mode (`AbstractPerturbation.modal_state`; a field
+        perturbation is drawn on `grid()`'s field model first)."""
+        return perturbation.modal_state(model.mode, model.rod.R, grid)
+
+    def field_of(self, model, q):
+        """θ = A sin(mπs/L) on 129 points (any leading axes of `q`)."""
+        s = jnp.linspace(0.0, model.rod.L, 129)
+        shape = jnp.sin(model.mode * jnp.pi * s / model.rod.L)
+        return s, jnp.tensordot(jnp.asarray(q), shape, axes=0)  # the outer product, without rank promotion
+
+    def dominant_mode(self, model, q):
+        return jnp.full(jnp.shape(q), model.mode)

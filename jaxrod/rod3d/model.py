@@ -20,7 +20,6 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float
 
-from ..modal import dominant_mode
 from ..models.base import AbstractModel
 from ..params import RodChannel
 from ._checks import check_arguments
@@ -356,45 +355,7 @@ class Rod3D(AbstractModel):
     def friction_acceleration(self, friction, v, t):
         raise NotImplementedError("Rod3D runs with the fixed-step schemes only (its friction is an impulse pass).")
 
-    def linear_flow(self, q, v, t, h):
-        raise NotImplementedError("Rod3D has no exact linear flow.")
-
     check = lambda self: jnp.array(True)  # its arguments are checked when it is made (`check_arguments`)
-
-    # -- the scene (a dead load F at the free end; `jaxrod.Scene`) -------------------------------
-    size_name: ClassVar[str] = "segments"
-    min_size: ClassVar[int] = 4
-    search_method: ClassVar[str] = "bisection"  # the departure rate is opt-in (`boundary.search`)
-    search_horizon: ClassVar[float] = 0.4  # E3's brackets keep their labels to 2 s (benchmarks/rod3d_commands.py)
-    sweep_lanes: ClassVar[int] = 1  # a lane per core: its steps are large enough to fill one
-    size = property(lambda self: self.n_segments)
-
-    @classmethod
-    def for_scene(cls, rod, F, size, mode) -> Rod3D:
-        return cls(rod, size, control="load", end_load=F)
-
-    @classmethod
-    def default_size(cls, rod, F, perturbation) -> int:
-        return 60  # a scene's segments, as E1 and E6 (docs/rod3d.md)
-
-    @classmethod
-    def scheme_under(cls, perturbation, rod=None, F=None) -> str | None:
-        """Its implicit default under a perturbation measured adequate for it (`implicit_3d`) and
-        below the wall's wrinkling load (`state.past_wrinkling`, where `rod` and a load `F` [N]
-        are given), else the explicit leapfrog."""
-        past = rod is not None and F is not None and state.past_wrinkling(cls.for_scene(rod, F, cls.min_size, 1))
-        return None if type(perturbation).implicit_3d and not past else "leapfrog"
-
-    @classmethod
-    def bytes_per_member(cls, size: int | None) -> int:
-        """Positions, velocities, rotations, forces, caches: 20 numbers per node per state row."""
-        return 8 * (24 * 20 * (size + 1) + 64) + 4096
-
-    scene_step = lambda self, rod, F, scheme_step: scheme_step(self)  # its scheme's default step
-    initial_state_under = lambda self, perturbation, integrator, grid: perturbation.initial_state(self, integrator)
-
-    field_of = lambda self, q: (jnp.linspace(0.0, self.rod.L, self.n + 1), self.theta(q.x))  # (s [m], θ [rad])
-    dominant_mode = lambda self, q: dominant_mode(wall_angle(q.x)[..., 1:-1])
 
     theta = staticmethod(wall_angle)  # (x) -> each node's angle from the channel bottom [rad], θ of the field model
     axial_force = energy.axial_force  # (x, Q) -> each segment's compressive axial force −EA σ₃ [N]

@@ -16,7 +16,7 @@ from .._results import RESULTS
 from ..integrators import default_for
 from ..integrators.base import RunOptions, save_grid
 from ..params import RodChannel
-from ..registry import make_perturbation, model_class
+from ..registry import make_perturbation, recipe
 from ..scene import Scene
 from .spec import ROD_FIELDS, SweepSpec, _STIFFNESS_FIELDS
 
@@ -96,7 +96,7 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float, sc
         return run.finished(N_SAVE)
 
     def outputs(ok, model, run):
-        dom = model.dominant_mode(run.q)
+        dom = recipe(spec.model).dominant_mode(model, run.q)
         code = integrator(model).result(model, run, jnp.asarray(h, run.t.dtype), check_limit)
         result = jnp.where(ok & model.check(), code, RESULTS.invalid_input).astype(jnp.int32)
         return {
@@ -164,7 +164,7 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
         rods = [RodChannel.reference(mu=spec.mu, **spec.rod)]
     if not rods:
         raise ValueError(f"no member of the sweep has valid rod parameters (the first: {errors[0]})")
-    cls = model_class(spec.model)
+    cls = recipe(spec.model)
     pert = _perturbation(spec)
     n = spec.n
     if n is None:  # the largest default size over the rods at the largest load
@@ -174,7 +174,7 @@ def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
     if spec.dt is not None:
         _check_given_step(spec, scenes)
     steps = [s.step() for s in scenes]
-    scheme = scenes[int(np.argmin(steps))].scheme() or cls.scheme  # the stiffest member's at the largest load
+    scheme = scenes[int(np.argmin(steps))].scheme() or cls.model_class.scheme  # the stiffest member's at the largest load
     dt = spec.dt or min(steps)
     grid_dt = min(Scene(r, jnp_.asarray(dF_max), kind="field", n=128).step() for r in rods)
     return n, float(dt), float(grid_dt), scheme

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..batching import DEFAULT_LANES, DEFAULT_REFILL_EVERY, run_pool
 from ..distributed import broadcast, gather, share
-from ..registry import model_class
+from ..registry import recipe
 from .member import _engine_member, _make_member, _static_resolution
 from .result import SweepResult, _FILL
 from .spec import OUTPUTS, PARAMETERS, SweepSpec
@@ -58,7 +58,7 @@ def _expand(inputs: Mapping[str, object], combine: str):
 
 
 def _bytes_per_member(spec: SweepSpec, n: int | None) -> int:
-    return model_class(spec.model).bytes_per_member(n)
+    return recipe(spec.model).bytes_per_member(n)
 
 
 def sweep(
@@ -152,7 +152,7 @@ def sweep(
     if scheduling not in ("pool", "chunk"):
         raise ValueError(f"scheduling = {scheduling!r} is invalid: expected 'pool' or 'chunk'.")
     if lanes is None:
-        lanes = model_class(spec.model).sweep_lanes or DEFAULT_LANES
+        lanes = recipe(spec.model).sweep_lanes or DEFAULT_LANES
     for name, val in (("lanes", lanes), ("refill_every", refill_every)):
         if not (isinstance(val, int) and val >= 1):
             raise ValueError(f"{name} = {val!r} is invalid: expected an int >= 1.")

@@ -6,7 +6,7 @@ import dataclasses
 from collections.abc import Mapping
 
 
-from ..registry import model_class, perturbation_class
+from ..registry import perturbation_class, recipe
 
 __all__ = ['ROD_FIELDS', 'PARAMETERS', 'OUTPUTS', 'SweepSpec']
 
@@ -56,7 +56,7 @@ class SweepSpec:
     rod: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
-        cls = model_class(self.model, "SweepSpec.model")
+        cls = recipe(self.model, "SweepSpec.model")
         if self.n is not None and not (isinstance(self.n, int) and self.n >= cls.min_size):
             raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model {self.model!r}: expected an int >= "
                              f"{cls.min_size} {cls.size_name or ''}".rstrip() + ".")
