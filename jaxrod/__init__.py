@@ -59,6 +59,7 @@ from .perturbations import RandomShape as RandomShape
 from .perturbations import RandomVelocity as RandomVelocity
 from .perturbations import SineVelocity as SineVelocity
 from .perturbations import UserState as UserState
+from .problem import Problem as Problem
 from .rod3d import Rod3D as Rod3D
 from .scene import Scene as Scene
 from .simulate import simulate as simulate
@@ -71,7 +72,7 @@ from .sweeps import wilson_interval as wilson_interval
 __all__ = [
     "RESULTS", "AbstractFixedStep", "AbstractFriction", "AbstractIntegrator", "AbstractLoad",
     "AbstractModel", "ConstantLoad", "Coulomb", "DiffraxSmooth", "Exact", "FieldModel",
-    "AdaptiveImplicitLeapfrog", "GalerkinModel", "ImplicitLeapfrog", "ProjectedLeapfrog", "ProjectedVerlet", "RampLoad", "RandomForce", "RandomShape",
+    "AdaptiveImplicitLeapfrog", "GalerkinModel", "ImplicitLeapfrog", "Problem", "ProjectedLeapfrog", "ProjectedVerlet", "RampLoad", "RandomForce", "RandomShape",
     "RandomVelocity", "Rod3D", "RodChannel", "RunOptions", "Scene", "SineVelocity", "SingleMode",
     "Solution", "SplitLinearFriction", "SweepResult", "SweepSpec", "SymplecticEuler", "Tanh",
     "UserState", "__version__", "boundary", "coulomb_prox", "critical_load", "critical_velocity",

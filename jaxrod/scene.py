@@ -21,7 +21,7 @@ from .models.galerkin import DEFAULT_MODES
 from .params import RodChannel
 from .perturbations import AbstractPerturbation, SineVelocity
 from .registry import model_names, perturbation_names, recipe
-from .simulate import simulate
+from .problem import DEFAULT_T1, Problem
 
 __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1",
            "default_nodes", "scheme_for"]
@@ -29,7 +29,6 @@ __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES",
 # the built-in names (`jaxrod.registry.model_names()` and `perturbation_names()` include any registered since)
 MODELS = model_names()
 PERTURBATIONS = perturbation_names()
-DEFAULT_T1 = 2.0  # s, as the reference paper
 
 
 class Scene(eqx.Module):
@@ -120,15 +119,16 @@ class Scene(eqx.Module):
             "EI, rho or R): the step is a static setting.")
         return grid, ProjectedVerlet(step)
 
-    def step(self) -> float:
+    def step(self, model=None, scheme: str | None = None) -> float:
         """The fixed step [s], static, from the rod's concrete values: `dt`, or the recipe's
-        `step` (the reduced rod models: 0.4 of the stability limit at ΔF = 0 and at most
+        `step` of `model` (default: `model()`) under `scheme` (default: `scheme()`) (the reduced rod models: 0.4 of the stability limit at ΔF = 0 and at most
         0.25/λ_max; the single mode 1e-4 s; the 3D rod its scheme's default step)."""
         if self.dt is not None:
             return float(self.dt)
         from .integrators import default_step
 
-        scheme = self.scheme()
+        model = self.model() if model is None else model
+        scheme = self.scheme(model) if scheme is None else scheme
 
         def scheme_step(model):
             try:
@@ -137,35 +137,43 @@ class Scene(eqx.Module):
                 raise ValueError(f"Scene.dt must be given explicitly for the {self.kind} model when the rod or the "
                                  "load is traced: the step is a static setting.") from None
 
-        return self.recipe.step(self.model(), self.rod, self.F, scheme_step)
+        return self.recipe.step(model, self.rod, self.F, scheme_step)
 
-    def scheme(self) -> str | None:
+    def scheme(self, model=None) -> str | None:
         """The scheme of the scene's runs (a key of `jaxrod.integrators.SCHEMES`; `None`: the
-        model's own): the recipe's `scheme_under` the perturbation and the load (the 3D rod runs its
-        implicit default only under a perturbation measured adequate for it, `implicit_3d`, and
-        below the wall's wrinkling load)."""
+        model's own): the recipe's `scheme_under` the perturbation for `model` (default: `model()`)
+        (the 3D rod runs its implicit default only under a perturbation measured adequate for it,
+        `implicit_3d`, and below the wall's wrinkling load)."""
         if self.scheme_key is not None:
             return self.scheme_key
-        return self.recipe.scheme_under(self.perturbation, self.rod, self.F)
+        return self.recipe.scheme_under(self.perturbation, self.model() if model is None else model)
 
-    def integrator(self) -> AbstractFixedStep:
-        """The run's integrator: the scene's scheme (`scheme`; `jaxrod.integrators.default_for`)
-        at `step()`."""
-        return default_for(self.model(), self.step(), self.scheme())
+    def integrator(self, model=None) -> AbstractFixedStep:
+        """The run's integrator for `model` (default: `model()`): the scene's scheme (`scheme`;
+        `jaxrod.integrators.default_for`) at `step`."""
+        model = self.model() if model is None else model
+        scheme = self.scheme(model)
+        return default_for(model, self.step(model, scheme), scheme)
 
     def initial_state(self):
-        """(q₀, v₀) in the model's coordinates (the recipe's `initial_state`)."""
-        return self.recipe.initial_state(self.model(), self.perturbation, self.integrator(), self._grid)
+        """(q₀, v₀) in the model's coordinates (the recipe's `initial_state`; `resolve`'s)."""
+        problem = self.resolve()
+        return problem.q0, problem.v0
+
+    def resolve(self, save_state: bool = True, model=None) -> Problem:
+        """The scene resolved once into a [`jaxrod.Problem`][]: its model (`model`, or built once
+        by `model()`), the integrator of its scheme at its step, the initial state under the
+        perturbation (the recipe's `initial_state`) and the run's options (`threshold`;
+        `save_state`: keep q and v at every save)."""
+        model = self.model() if model is None else model
+        integrator = self.integrator(model)
+        q0, v0 = self.recipe.initial_state(model, self.perturbation, integrator, self._grid)
+        return Problem(model, integrator, q0, v0, RunOptions(buckle_threshold=self.threshold, save_state=save_state))
 
     def run(self, t1: float = DEFAULT_T1, n_save: int = 201, save_state: bool = True, throw: bool = False):
-        """Simulate the scene to `t1` [s]; returns a [`jaxrod.Solution`][]. The run stops when
-        max|θ| passes `threshold` (buckled) or the rod is stuck."""
-        q0, v0 = self.initial_state()
-        return simulate(
-            self.model(), self.integrator(), q0, v0, t1, n_save=n_save,
-            options=RunOptions(buckle_threshold=self.threshold, save_state=save_state),
-            throw=throw,
-        )
+        """Simulate the scene to `t1` [s] (`resolve().run(...)`); returns a [`jaxrod.Solution`][].
+        The run stops when max|θ| passes `threshold` (buckled) or the rod is stuck."""
+        return self.resolve(save_state).run(t1, n_save=n_save, throw=throw)
 
     def field_of(self, q):
         """θ on a grid of nodes for plots: (s [m], θ [rad]) from the model's coordinates."""

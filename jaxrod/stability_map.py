@@ -133,7 +133,7 @@ def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size) -> Sw
     rod = RodChannel.reference(mu=mu)
     F0 = float(theory.reference_load(rod))
     pert = make_perturbation("sine", 1.0, mode)
-    keys = [cls.scheme_under(pert, rod, F0 + x) for x in dF]
+    keys = [cls.scheme_under(pert, cls.build(rod, F0 + x, cls.min_size, mode)) for x in dF]  # a small probe per load
     starts = [j for j in range(len(dF)) if j == 0 or keys[j] != keys[j - 1]]
     if len(starts) > 1 and n is None:
         n = cls.default_size(rod, F0 + float(dF.max()), pert)

@@ -299,3 +299,38 @@ def test_a_curve_searched_at_once_without_n_takes_the_resolution_of_its_largest_
         jr.boundary.boundary_curve(ROD, [3.0, 40.0, 7.0], continuation=False, sensitivities=())
     top = jr.Scene(ROD, 40.0, kind="field")
     assert seen.value.args == (top.size(), top.step()) and top.size() != jr.Scene(ROD, 3.0, kind="field").size()
+
+
+def _counting_builds(monkeypatch, kind):
+    """Count the constructions of `kind`'s model through its recipe (`build`)."""
+    from jaxrod import registry
+
+    cls = type(registry.recipe(kind))
+    build, calls = cls.build, []
+    monkeypatch.setattr(cls, "build", lambda self, *args: calls.append(args) or build(self, *args))
+    return calls
+
+
+@pytest.mark.parametrize("kind,n,pert", [("mode", None, jr.RandomVelocity(0.01, jax.random.key(1))),
+                                         ("galerkin", 8, SineVelocity(0.01)), ("field", 16, SineVelocity(0.01)),
+                                         ("rod3d", 6, SineVelocity(0.01))])
+def test_a_scene_resolves_into_a_problem_building_its_model_once(monkeypatch, kind, n, pert):
+    calls = _counting_builds(monkeypatch, kind)
+    problem = jr.Scene(ROD, 5.0, pert, kind=kind, n=n).resolve()
+    assert len(calls) == 1
+    assert isinstance(problem.model, jr.registry.model_class(kind)) and problem.integrator.dt > 0
+    assert problem.options.buckle_threshold == 0.5 and problem.options.save_state
+
+
+def test_a_scene_run_and_the_simulate_command_build_the_model_once(monkeypatch, capsys):
+    from jaxrod.cli import main
+
+    calls = _counting_builds(monkeypatch, "field")
+    scene = jr.Scene(ROD, 5.0, SineVelocity(0.01), kind="field", n=16)
+    sol = scene.run(t1=0.01, n_save=3)
+    assert len(calls) == 1 and int(sol.result) == 0
+    again = scene.resolve().run(t1=0.01, n_save=3)
+    np.testing.assert_array_equal(np.asarray(again.amplitude), np.asarray(sol.amplitude))
+    calls.clear()
+    assert main(["simulate", "--model", "field", "--n", "16", "--t1", "0.01", "--json"]) == 0
+    assert len(calls) == 1 and '"model": "field"' in capsys.readouterr().out

@@ -14,7 +14,7 @@ LAYERS = [
     ["theory", "lockup"],
     ["models", "rod3d.so3", "rod3d.model", "rod3d"],
     ["integrators"],
-    ["perturbations", "simulate", "registry"],
+    ["perturbations", "simulate", "problem", "registry"],
     ["scene", "lockup.push", "lockup.staircase"],
     ["sweeps", "boundary", "model_choice"],
     ["stability_map", "worst_case", "figures"],

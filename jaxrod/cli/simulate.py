@@ -26,7 +26,8 @@ def _cmd_simulate(args) -> int:
     pert = make_perturbation(args.perturbation, args.amplitude, args.mode, jax.random.key(args.seed))
     scene = Scene(rod, args.dF, pert, args.model, args.n, args.mode, args.dt)
     try:
-        sol = scene.run(t1=args.t1, n_save=args.n_save, save_state=True, throw=False)
+        problem = scene.resolve()  # the model built once
+        sol = problem.run(t1=args.t1, n_save=args.n_save, throw=False)
     except ValueError as err:  # a step above the model's stability limit: given, or the default
         msg = str(err)
         if "dt" in msg:
@@ -43,11 +44,11 @@ def _cmd_simulate(args) -> int:
         "dF": args.dF,
         "F": float(scene.F),
         "n": scene.size(),
-        "dt": scene.step(),
+        "dt": problem.integrator.dt,
         "t1": args.t1,
         "buckled": bool(sol.buckled),
         "t_buckle": _json_number(sol.t_buckle),
-        "dominant_mode": int(scene.dominant_mode(sol.q_final)),
+        "dominant_mode": int(scene.recipe.dominant_mode(problem.model, sol.q_final)),
         "max_theta": float(jnp.max(sol.amplitude)),
         "stuck": bool(sol.stuck[-1]),
         "t_stop": float(sol.t_stop),
@@ -101,17 +102,18 @@ def _simulate_rod3d(args, rod) -> int:
     F = float(theory.reference_load(rod)) + args.dF if args.control != "displacement" else 0.0
     if args.control == "load":  # a dead load at the free end: the scene of every model
         scene = Scene(rod, args.dF, pert, "rod3d", n, args.mode, args.dt)
-        model, scheme = scene.model(), scene.scheme()
+        model = scene.model()  # built once: the problem below is resolved on it
+        scheme = scene.scheme(model)
     else:  # held ends after a pre-compression, or a pushed end: the 3D rod's own controls
         model = Rod3D(rod, n, control=args.control, speed=args.speed, preload=F if args.control == "force" else 0.0)
-        scheme = Rod3DRecipe().scheme_under(pert, rod, F)  # the implicit default under a sine velocity below the wrinkling load
+        scheme = Rod3DRecipe().scheme_under(pert, model)  # the implicit default under a sine velocity below the wrinkling load
     limit = float(default_for(model, 1.0, scheme).step_limit(model))
     if args.dt is not None and not (0 < args.dt < limit):
         _fail(f"argument --dt: {args.dt!r} s is invalid: the step limit of this rod's scheme is {limit:.4g} s; "
               f"use 0 < dt < {limit:.4g} s.")
     if args.control == "load":
-        dt = scene.step()
-        q0, v0 = scene.initial_state()
+        problem = scene.resolve(model=model)
+        dt, q0, v0 = problem.integrator.dt, problem.q0, problem.v0
     else:
         q0, v0 = model.initial_state(F, lateral_velocity=sine_velocity(model, args.amplitude, args.mode))
         dt = default_step(model, q0, scheme) if args.dt is None else args.dt

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
 from .. import theory
-from ..loads import AbstractLoad
+from ..loads import AbstractLoad, as_load
 from ..params import RodChannel
 from .base import AbstractModel, friction_work
 from .recipe import AbstractRecipe
@@ -226,10 +226,6 @@ class RodDOFRecipe(AbstractRecipe):
 
     search_method: ClassVar[str] = "departure"
 
-    @abc.abstractmethod
-    def size_of(self, model) -> int:
-        """The model's static size (nodes, modes)."""
-
     def build(self, rod, F, size, mode):
         """`from_rod(rod, size, F=F)` (the sine `mode` is not needed: every mode is modelled)."""
         return self.model_class.from_rod(rod, size, F=F)
@@ -239,7 +235,7 @@ class RodDOFRecipe(AbstractRecipe):
         highest frequency) and, when the load is concrete, at most `GROWTH_FRACTION`/λ_max,
         λ_max = F/(2√(EIρ)) the fastest growth rate of a loaded rod, so that fast-growing modes
         stay resolved (benchmarks/README.md, field convergence)."""
-        unloaded = self.build(rod, theory.reference_load(rod), self.size_of(model), 1)
+        unloaded = eqx.tree_at(lambda m: m.load, model, as_load(theory.reference_load(rod)))
         omega = static_float(lambda: jnp.max(unloaded.max_frequency()),
                         "Scene.dt must be given explicitly when the rod's stiffness parameters are traced "
                         "(e.g. vmapped over EI, rho or R): the step is a static setting.")

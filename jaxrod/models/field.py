@@ -196,9 +196,6 @@ class FieldRecipe(RodDOFRecipe):
     size_name: ClassVar[str] = "nodes"
     min_size: ClassVar[int] = 4
 
-    def size_of(self, model) -> int:
-        return model.n_nodes
-
     def default_size(self, rod, F, perturbation) -> int:
         """`default_nodes` of the load, and at least the nodes the perturbation needs resolved
         (`AbstractPerturbation.least_nodes`)."""

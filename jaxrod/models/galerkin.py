@@ -165,9 +165,6 @@ class GalerkinRecipe(RodDOFRecipe):
     size_name: ClassVar[str] = "modes"
     min_size: ClassVar[int] = 1
 
-    def size_of(self, model) -> int:
-        return model.n_modes
-
     def default_size(self, rod, F, perturbation) -> int:
         return DEFAULT_MODES
 

@@ -55,10 +55,10 @@ class AbstractRecipe(eqx.Module):
         """The size a problem of `rod` at the concrete load `F` [N] under `perturbation` uses
         when none is given."""
 
-    def scheme_under(self, perturbation, rod=None, F=None) -> str | None:
+    def scheme_under(self, perturbation, model=None) -> str | None:
         """The scheme (a key of `jaxrod.integrators.SCHEMES`) of a run under `perturbation`, of
-        `rod` under the axial load `F` [N] where they are given; `None` (the default): the
-        model's own (`model_class.scheme`)."""
+        `model` where it is given (a scheme may depend on the load it carries); `None` (the
+        default): the model's own (`model_class.scheme`)."""
         return None
 
     def bytes_per_member(self, size: int | None) -> int:

@@ -35,11 +35,11 @@ class Rod3DRecipe(AbstractRecipe):
     def default_size(self, rod, F, perturbation) -> int:
         return self.default_segments
 
-    def scheme_under(self, perturbation, rod=None, F=None) -> str | None:
-        """Its implicit default under a perturbation measured adequate for it (`implicit_3d`) and
-        below the wall's wrinkling load (`state.past_wrinkling`, where `rod` and a load `F` [N]
-        are given), else the explicit leapfrog."""
-        past = rod is not None and F is not None and state.past_wrinkling(self.build(rod, F, self.min_size, 1))
+    def scheme_under(self, perturbation, model=None) -> str | None:
+        """Its implicit default under a perturbation measured adequate for it (`implicit_3d`) and,
+        where `model` is given, below the wall's wrinkling load (`state.past_wrinkling` of its
+        axial force), else the explicit leapfrog."""
+        past = model is not None and state.past_wrinkling(model)
         return None if type(perturbation).implicit_3d and not past else "leapfrog"
 
     def bytes_per_member(self, size: int | None) -> int:
