@@ -90,14 +90,16 @@ def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_
         ("F_far_max", "0.5"), ("F_far_max", "1.0"), ("F_far_max", "1.5"), ("F_far_max", "2.0"), ("F_far_max", "3.0"),
         ("muL_lock", "nan")]
     for row, mine in zip(committed, again):
+        assert row["segments_pair"] == mine["segments_pair"]
         for k in ("quasi_static", "error_bar", "d_segments", "d_half_speed", "d_quarter_speed", "lo", "hi"):
             assert float(row[k]) == pytest.approx(mine[k], rel=1e-12), (row["muL_over_ell"], k)
         assert (row["converged_segments"], row["converged_speed"]) == (
             str(int(mine["converged_segments"])), str(int(mine["converged_speed"])))
     readme = (ROOT / "README.md").read_text()
     ok = [r for r in committed if r["converged_segments"] == "1" and r["converged_speed"] == "1"]
-    assert [(r["quantity"], r["muL_over_ell"]) for r in ok] == [("F_far_max", "1.0"), ("F_far_max", "2.0"),
-                                                                  ("muL_lock", "nan")]
+    assert [(r["quantity"], r["muL_over_ell"]) for r in ok] == [("F_far_max", "0.5"), ("F_far_max", "1.0"),
+                                                                  ("F_far_max", "2.0"), ("muL_lock", "nan")]
+    assert [r["segments_pair"] for r in committed] == ["64/32", "32/16", "32/16", "32/16", "32/16", "32/16"]
     for r in ok:
         assert f"{float(r['quasi_static']):.3f} ± {float(r['error_bar']):.3f}" in readme
 

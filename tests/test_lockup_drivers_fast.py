@@ -88,11 +88,13 @@ def test_the_closed_forms_beside_a_lane_are_the_soft_strings_in_units_of_F0_and_
 def test_the_jobs_are_each_group_at_the_base_run_and_its_converge_lanes_at_the_others():
     """The full setting runs every lane at the base (16 segments per wave, 10 mm/s), twice the
     segments, half and a quarter of the speed (the quasi-static limit and the segment convergence
-    at every point, issue [lockup-converged]); μL/ℓ = 4 (past the bound's lock-up) only at the base."""
+    at every point, issue [lockup-converged]); μL/ℓ = 4 (past the bound's lock-up) only at the base;
+    the `refine` lanes (μL/ℓ = 0.5) also at four times the base's segments."""
     jobs = list(lx._jobs(lx.SETTINGS[False]))
     runs = [(16, 10e-3), (32, 10e-3), (16, 5e-3), (16, 2.5e-3)]
     assert jobs == ([((2.0, (0.5, 1.0, 1.5, 2.0), None), run) for run in runs]
-                    + [((4.0, (3.0, 4.0), "auto"), runs[0])] + [((4.0, (3.0,), "auto"), run) for run in runs[1:]])
+                    + [((4.0, (3.0, 4.0), "auto"), runs[0])] + [((4.0, (3.0,), "auto"), run) for run in runs[1:]]
+                    + [((2.0, (0.5,), None), (64, 10e-3))])
     # without "lock" in converge a group with no converge lane is not run again; without converge
     # every lane runs at every setting
     S = dict(groups=((1.5, (0.5,), 0.7), (3.0, (2.0,), None)), runs=((8, 0.02), (12, 0.02)), converge=(2.0,))
@@ -599,3 +601,30 @@ def test_a_job_hands_every_setting_to_its_staircase(tmp_path, monkeypatch):
     assert seen["mus"] == [0.25, 0.5, 0.75] and seen["vary_mu"] == [False, False, True]
     assert seen["starts"][2] == 0.0 and min(seen["starts"][:2]) >= 0.1
     assert seen["n"] == max(8, math.ceil(8 * 2.0 / (2 * math.pi * math.sqrt(lx.R_OVER_ELL))))
+
+
+def test_a_point_refined_to_four_times_the_segments_is_judged_on_the_last_refinement():
+    """Where n against 2n fails and the point ran at 4n too (`SETTINGS[...]["refine"]`), the segment
+    test is 4n against 2n and the bar's segment term the larger of |m(4n) − m(2n)| and the distance
+    of the speed-converged value from m(2n); without the 4n run, |m(2n) − m(n)| as before."""
+    from jaxrod.experiments.lockup_convergence import converged
+
+    S = {"runs": ((16, 0.01), (32, 0.01), (16, 0.005), (16, 0.0025))}
+
+    def run(w, v, mid, half=0.05):
+        return dict(quantity="F_far_max", muL_over_ell=0.5, kind="run", segments_per_wave=w, push_speed=v,
+                    status="bracketed", lo=mid - half, hi=mid + half)
+
+    rows = [run(16, 0.01, 3.50), run(32, 0.01, 3.66), run(16, 0.005, 3.65), run(16, 0.0025, 3.66)]
+    (coarse,) = converged(rows, S)
+    assert coarse["segments_pair"] == "32/16" and not coarse["converged_segments"] and coarse["converged_speed"]
+    assert coarse["quasi_static"] == pytest.approx(3.66)
+    assert coarse["error_bar"] == pytest.approx(0.01 + 0.05 + 0.16)  # speed + v/4's half-width + |m(2n) − m(n)|
+    (fine,) = converged(rows + [run(64, 0.01, 3.67)], S)
+    assert fine["segments_pair"] == "64/32" and fine["converged_segments"]
+    assert fine["d_segments"] == pytest.approx(3.67 / 3.66 - 1)
+    assert fine["quasi_static"] == pytest.approx(3.66)  # the value stays the speed-converged one at n
+    assert fine["error_bar"] == pytest.approx(0.01 + 0.05 + 0.01)
+    (apart,) = converged([run(16, 0.01, 3.50), run(32, 0.01, 3.80), run(16, 0.005, 3.65), run(16, 0.0025, 3.66),
+                          run(64, 0.01, 3.81)], S)
+    assert apart["converged_segments"] and apart["error_bar"] == pytest.approx(0.01 + 0.05 + 0.14)  # |3.66 − 3.80|

@@ -40,9 +40,11 @@ VARIANTS = [("chen", "with_weight"), ("chen", "without_weight"), ("wu_juvkam_wol
 SETTINGS = {
     # groups: (L/ℓ, far-load lanes' μL/ℓ, the lock-up lane's first μL/ℓ, "auto" or None);
     # runs: (segments per buckle wavelength, push speed [m/s]) — the base, twice the segments, half and a quarter
-    # of the speed; every lane runs at the base, the lanes in `converge` (μL/ℓ, or "lock" for the lock-up lane) at all
+    # of the speed; every lane runs at the base, the lanes in `converge` (μL/ℓ, or "lock" for the lock-up lane) at all;
+    # refine: (L/ℓ, μL/ℓ) lanes that also run at four times the base's segments (their n against 2n failed)
     False: dict(groups=((2.0, (0.5, 1.0, 1.5, 2.0), None), (4.0, (3.0, 4.0), "auto")), f_c=6.0,
                 runs=((16, 10e-3), (32, 10e-3), (16, 5e-3), (16, 2.5e-3)), converge=(0.5, 1.0, 1.5, 2.0, 3.0, "lock"),
+                refine=((2.0, 0.5),),
                 first_push=0.4, stage_push=0.15, max_stages=16, saves_per_stage=41),
     True: dict(groups=((2.0, (0.5, 1.0, 2.0), None),), f_c=6.0, runs=((16, 10e-3),), first_push=0.4,
                stage_push=0.15, max_stages=8, saves_per_stage=41),
@@ -72,8 +74,8 @@ def _closed(rod, X, f_c):
 
 
 def _jobs(S):
-    """(group, run) of every staircase of the setting: each group at the base run, and its lanes in
-    `converge` at the others."""
+    """(group, run) of every staircase of the setting: each group at the base run, its lanes in
+    `converge` at the others, and the lanes in `refine` at four times the base's segments."""
     conv = S.get("converge")
     for Lx, Xs, lock in S["groups"]:
         for k, run in enumerate(S["runs"]):
@@ -83,6 +85,9 @@ def _jobs(S):
                 if not xs and lk is None:
                     continue
             yield (Lx, xs, lk), run
+    w0, v0 = S["runs"][0]
+    for Lx, X in S.get("refine", ()):
+        yield (Lx, (X,), None), (4 * w0, v0)
 
 
 _STAGE_KEYS = ("f_c", "first_push", "stage_push", "saves_per_stage")
