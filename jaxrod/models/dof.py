@@ -10,17 +10,16 @@ from __future__ import annotations
 from typing import ClassVar
 
 import abc
-import math
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Bool, Float
+from jaxtyping import Array, Float
 
 from .. import theory
 from ..loads import AbstractLoad, as_load
 from ..params import RodChannel
-from .base import AbstractModel, friction_work
+from .base import AbstractModel
 from .recipe import AbstractRecipe
 
 __all__ = ["AbstractDOFModel", "AbstractRodDOFModel", "RodDOFRecipe", "DT_FRACTION", "GROWTH_FRACTION", "static_float"]
@@ -39,39 +38,19 @@ def static_float(fn, message: str) -> float:
 
 
 class AbstractDOFModel(AbstractModel):
-    """A model with friction per degree of freedom (or per sample point): the per-DOF step
-    pieces, stick test and defaults of the reduced models."""
+    """A model with friction per degree of freedom (or per sample point), whose state is one
+    array: the conservative `acceleration` (abstract) is what a kick needs, a stick test per DOF,
+    and a lateral field's coordinates are its samples. With the defaults of `AbstractModel` (the
+    kick, drift, per-DOF friction and its work) a subclass writes its forces, friction bounds,
+    energies, highest frequency and, to take field perturbations, its `sample_points`."""
 
-    held_is_fixed: ClassVar[bool] = True
-    scheme: ClassVar[str] = "verlet"
-
-    # -- the step ---------------------------------------------------------------------------------
+    @abc.abstractmethod
+    def acceleration(self, q, t):
+        """The conservative (elastic + load + gravity) acceleration −M⁻¹∇V at `q`, time `t`."""
 
     def accelerations(self, q, v, t):
         """The conservative acceleration (no velocity-dependent forces)."""
         return self.acceleration(q, t)
-
-    def kick(self, q, v, a, h):
-        return v + h * a
-
-    def drift(self, q, v, h):
-        return q + h * v
-
-    def friction_update(self, friction, v_trial, v_prev, h, t, q=None, a=None):
-        """The per-DOF law's update with the bounds of `friction_bounds`."""
-        f_s, f_d = self.friction_bounds(t)
-        return friction.update(v_trial, v_prev, h, f_s, f_d)
-
-    def friction_acceleration(self, friction, v, t):
-        f_s, f_d = self.friction_bounds(t)
-        return friction.acceleration(v, f_s, f_d)
-
-    def impulse_work(self, v_prev, v_trial, v_after, a, h):
-        """Friction's loss per DOF (`friction_work`); no driven boundary does work."""
-        return friction_work(self, v_prev, v_trial, v_after), jnp.zeros((), jnp.result_type(float))
-
-    def observables(self, q, v, a, t) -> dict:
-        return {}
 
     # -- stopping ---------------------------------------------------------------------------------
 
@@ -79,15 +58,8 @@ class AbstractDOFModel(AbstractModel):
     def autonomous(self) -> bool:
         return True
 
-    @property
-    def buckle_threshold(self) -> float:
-        return math.inf
-
     def amplitude(self, q) -> Float[Array, ""]:
         return jnp.max(jnp.abs(q))
-
-    def is_stuck(self, q, v, a, t) -> Bool[Array, ""]:
-        return self.stop_measures(q, v, a, t)[1]
 
     def stop_measures(self, q, v, a, t):
         """Both from one reduction, the largest of |q| and of |v| + max(|a| − f_s, 0), which is
@@ -99,10 +71,7 @@ class AbstractDOFModel(AbstractModel):
         both = jnp.max(jnp.stack([jnp.abs(q), held]).reshape(2, -1), axis=-1)
         return both[0], both[1] == 0
 
-    def check(self) -> Bool[Array, ""]:
-        return jnp.array(True)
-
-    # -- perturbations and derivatives ------------------------------------------------------------
+    # -- perturbations ----------------------------------------------------------------------------
 
     def sample_points(self) -> Float[Array, " n"]:
         raise TypeError(
@@ -114,11 +83,6 @@ class AbstractDOFModel(AbstractModel):
         """Identity: the nodal models' coordinates are the samples."""
         return values
 
-    @property
-    def resolved_modes(self) -> int:
-        """One sine mode per sample point."""
-        return self.sample_points().shape[-1]
-
     def perturbed_state(self, offset, velocity):
         """θ = offset/R and θ̇ = velocity/R in the model's coordinates (`from_samples`)."""
         R = self.rod.R
@@ -127,12 +91,6 @@ class AbstractDOFModel(AbstractModel):
     def under_lateral_force(self, force) -> AbstractModel:
         """The acceleration force/(ρR) added, in the model's coordinates (`from_samples`)."""
         return _Forced(self, self.from_samples(force / (self.rod.rho * self.rod.R)))
-
-    def translation(self, q, v):
-        return q, v
-
-    def for_tangents(self) -> AbstractModel:
-        return self
 
 
 class AbstractRodDOFModel(AbstractDOFModel):
@@ -190,10 +148,6 @@ class _Forced(AbstractModel):
 
     inner: AbstractModel
     extra: Float[Array, " n"]
-
-    # the class constants of every per-DOF model (`AbstractDOFModel`, the only models it wraps)
-    held_is_fixed: ClassVar[bool] = True
-    scheme: ClassVar[str] = "verlet"
 
     def acceleration(self, q, t):
         return self.inner.acceleration(q, t) + self.extra

@@ -355,7 +355,6 @@ class Rod3D(AbstractModel):
     def friction_acceleration(self, friction, v, t):
         raise NotImplementedError("Rod3D runs with the fixed-step schemes only (its friction is an impulse pass).")
 
-    check = lambda self: jnp.array(True)  # its arguments are checked when it is made (`check_arguments`)
 
     theta = staticmethod(wall_angle)  # (x) -> each node's angle from the channel bottom [rad], θ of the field model
     axial_force = energy.axial_force  # (x, Q) -> each segment's compressive axial force −EA σ₃ [N]
