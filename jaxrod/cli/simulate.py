@@ -90,7 +90,7 @@ def _simulate_rod3d(args, rod) -> int:
 
     args.control = args.control or "force"  # the defaults (checked by cli._checks: rod3d only)
     args.speed = 1e-3 if args.speed is None else args.speed
-    n = 60 if args.n is None else args.n
+    n = Rod3DRecipe.default_segments if args.n is None else args.n  # the 3D scene's one default
     n_save = min(args.n_save, 1001)
     import jax
 
