@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
-__all__ = ["safe_norm", "safe_hypot", "float_leaf", "computed_once"]
+__all__ = ["safe_norm", "safe_hypot", "float_leaf", "concrete_value", "format_value", "computed_once"]
 
 
 def safe_norm(v: Float[Array, "... 3"], axis: int = -1) -> Float[Array, "..."]:
@@ -32,6 +34,22 @@ def float_leaf(x):
         return jnp.asarray(x, dtype=jnp.result_type(float))
     x = jnp.asarray(x)
     return x if jnp.issubdtype(x.dtype, jnp.floating) else x.astype(jnp.result_type(float))
+
+
+def concrete_value(x) -> np.ndarray | None:
+    """The value of `x` on the host, or `None` while it is being traced (no check possible): what
+    an argument check reads."""
+    if isinstance(x, jax.core.Tracer):
+        return None
+    try:
+        return np.asarray(x)
+    except Exception:  # pragma: no cover - abstract values of exotic transforms
+        return None
+
+
+def format_value(v: np.ndarray) -> str:
+    """A concrete value for an error message: the number, or a short array."""
+    return repr(v.item()) if v.ndim == 0 else np.array2string(v, threshold=6)
 
 
 def computed_once(values, ref: Float[Array, "..."]):

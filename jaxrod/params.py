@@ -5,27 +5,12 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
-import jax
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ._numerics import float_leaf
+from ._numerics import concrete_value as _concrete, float_leaf, format_value as _fmt
 
 __all__ = ["RodChannel"]
-
-
-def _concrete(x) -> np.ndarray | None:
-    """The value of `x` on the host, or `None` while it is being traced (no check possible)."""
-    if isinstance(x, jax.core.Tracer):
-        return None
-    try:
-        return np.asarray(x)
-    except Exception:  # pragma: no cover - abstract values of exotic transforms
-        return None
-
-
-def _fmt(v: np.ndarray) -> str:
-    return repr(v.item()) if v.ndim == 0 else np.array2string(v, threshold=6)
 
 
 class RodChannel(eqx.Module):

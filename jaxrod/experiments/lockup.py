@@ -153,12 +153,12 @@ def _job(args):
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    from ..lockup.push import _wave, push_rod
+    from ..lockup.push import buckle_wavelength, push_rod
     from ..lockup.staircase import staircase
 
     (Lx, Xs, X_lock0), (per_wave, speed), S, path, progress = args
     rod = push_rod(Lx, R_OVER_ELL, 1.0)  # μ = 1 gives L = (L/ℓ) ℓ; each lane sets its own μ
-    n = max(8, math.ceil(per_wave * float(rod.L) / _wave(rod)))
+    n = max(8, math.ceil(per_wave * float(rod.L) / buckle_wavelength(rod)))
     if X_lock0 == "auto":  # 0.8 × the smallest soft-string μL_lock(f_c)/ℓ
         X_lock0 = 0.8 * min(v["lock_at_fc"] for v in _closed(rod, 1.0, S["f_c"]).values())
     locks = [] if X_lock0 is None else [X_lock0]

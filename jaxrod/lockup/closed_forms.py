@@ -31,8 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .._numerics import float_leaf
-from ..params import _concrete, _fmt
+from .._numerics import concrete_value as _concrete, float_leaf, format_value as _fmt
 
 __all__ = [
     "HELICAL_ONSETS",

@@ -36,7 +36,7 @@ from ..rod3d import Rod3D, step_limit
 from ..simulate import simulate
 from .si import case
 
-__all__ = ["push_rod", "push_model", "push", "inject", "inject_lanes", "lane_models", "lane", "locked", "extents", "units", "SEGMENTS_PER_WAVE"]
+__all__ = ["push_rod", "push_model", "push", "inject", "inject_lanes", "lane_models", "lane", "locked", "extents", "units", "buckle_wavelength", "SEGMENTS_PER_WAVE"]
 
 SEGMENTS_PER_WAVE = 16
 """Default resolution: segments per buckle wavelength at the sinusoidal onset, 2π√(ℓr) (§3). A
@@ -76,7 +76,7 @@ def units(rod: RodChannel) -> tuple[float, float]:
     return c["F0"], c["ell"]
 
 
-def _wave(rod: RodChannel) -> float:
+def buckle_wavelength(rod: RodChannel) -> float:
     """The buckle wavelength at the sinusoidal onset, 2π√(ℓr) [m] (§3)."""
     return 2 * math.pi * math.sqrt(units(rod)[1] * float(rod.R))
 
@@ -87,7 +87,7 @@ def push_model(rod: RodChannel, n: int | None = None, F_in: float = 0.0, rate: f
     (node n) guided on the channel bottom, free along the rod and pushed by the dead load `F_in`
     [N] rising at `rate` [N/s]; other keywords go to [`jaxrod.rod3d.Rod3D`][]."""
     if n is None:
-        n = max(20, math.ceil(SEGMENTS_PER_WAVE * float(rod.L) / _wave(rod)))
+        n = max(20, math.ceil(SEGMENTS_PER_WAVE * float(rod.L) / buckle_wavelength(rod)))
     return Rod3D(rod, int(n), control="load", end_load=F_in, load_rate=rate, ends="pinned", **rod3d)
 
 
@@ -168,7 +168,7 @@ def _phases(rod, phases, q, v, dt, n_save, progress, lanes=False, adjust=None, s
            for name in parts[0]}
     n = q.x.shape[-2] - 1
     s_nodes = np.arange(n + 1) * (float(rod.L) / n)
-    rec["helical"], rec["sinusoidal"] = extents(rec["theta"], s_nodes, _wave(rod))
+    rec["helical"], rec["sinusoidal"] = extents(rec["theta"], s_nodes, buckle_wavelength(rod))
     rec.update(push=rec["u"][..., -1], F0=F0, ell=ell, r=float(rod.R), n=n, dt=dt,
                result=result if lanes else int(result))
     return rec

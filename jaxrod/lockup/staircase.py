@@ -43,7 +43,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..integrators.base import RunOptions
-from .push import _check, _run_lanes, _start, _wave, extents, lane_models, units
+from .push import _check, _run_lanes, _start, buckle_wavelength, extents, lane_models, units
 from .verdict import LOCKED, SLIDING, TRANSIENT, Criterion, verdict
 
 __all__ = ["staircase", "BRACKETED", "WIDE", "BELOW_START"]
@@ -127,7 +127,7 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     F0, ell = units(rod)
     L, r = float(rod.L), float(rod.R)
     l0 = L / n
-    s_nodes, wave = np.arange(n + 1) * l0, _wave(rod)
+    s_nodes, wave = np.arange(n + 1) * l0, buckle_wavelength(rod)
 
     mu_now, far_now = mus.copy(), far_loads.copy()
     pushing = np.ones(mus.shape, bool)

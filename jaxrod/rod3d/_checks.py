@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..params import _concrete
+from .._numerics import concrete_value as _concrete
 
 __all__ = ["check_arguments"]
 
