@@ -15,7 +15,7 @@ from __future__ import annotations
 import importlib
 
 __all__ = ["register_model", "register_perturbation", "recipe", "model_class", "perturbation_class", "model_names",
-           "perturbation_names", "name_of_model", "recipe_of", "make_perturbation"]
+           "perturbation_names", "name_of", "name_of_model", "recipe_of", "make_perturbation"]
 
 # name -> recipe (models) or class (perturbations), or "module:attribute" for a class imported
 # when first asked for (a recipe class is made into its instance)
@@ -81,14 +81,31 @@ def _lookup(table: dict, name: str, argument: str, instance: bool = False):
     return obj
 
 
-def recipe(name: str, argument: str = "model"):
-    """The recipe of the model registered as `name` (`argument`: the name of the setting, for the error)."""
-    return _lookup(_MODELS, name, argument, instance=True)
+def recipe(model, argument: str = "model"):
+    """The recipe of `model`: `model` itself where it is a recipe (an `AbstractRecipe` instance,
+    registered or not: the library takes objects), else the recipe registered under the name
+    `model` (`argument`: the name of the setting, for the error)."""
+    from .models.recipe import AbstractRecipe
+
+    if isinstance(model, AbstractRecipe):
+        return model
+    return _lookup(_MODELS, model, argument, instance=True)
 
 
-def model_class(name: str, argument: str = "model"):
-    """The model class registered as `name`: its recipe's `model_class`."""
-    return recipe(name, argument).model_class
+def model_class(model, argument: str = "model"):
+    """The model class of `model` (a recipe or a registered name): its recipe's `model_class`."""
+    return recipe(model, argument).model_class
+
+
+def name_of(model) -> str:
+    """The name of `model` (a recipe or a registered name) in messages and stored settings: the
+    name it is registered under, else its recipe's class name."""
+    if isinstance(model, str):
+        return model
+    for name, obj in _MODELS.items():
+        if obj is model or (not isinstance(obj, str) and obj == model):
+            return name
+    return type(model).__name__
 
 
 def perturbation_class(name: str, argument: str = "perturbation"):

@@ -19,8 +19,9 @@ from .models.dof import DT_FRACTION, static_float
 from .models.field import DEFAULT_NODES, FieldModel, default_nodes
 from .models.galerkin import DEFAULT_MODES
 from .params import RodChannel
+from .models.recipe import AbstractRecipe
 from .perturbations import AbstractPerturbation, SineVelocity
-from .registry import model_names, perturbation_names, recipe
+from .registry import model_names, name_of, perturbation_names, recipe
 from .problem import DEFAULT_T1, Problem
 
 __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1",
@@ -39,7 +40,8 @@ class Scene(eqx.Module):
     - `rod`: the [`jaxrod.RodChannel`][].
     - `dF`: load above the critical mode's frictionless load [N] (dynamic).
     - `perturbation`: any perturbation (dynamic leaves: amplitude, key, ...).
-    - `kind`: `"mode"`, `"galerkin"`, `"field"` or `"rod3d"` (the full 3D rod,
+    - `kind`: the model's recipe (a [`jaxrod.models.recipe.AbstractRecipe`][] instance, registered
+      or not), or the name of a registered one: `"mode"`, `"galerkin"`, `"field"` or `"rod3d"` (the full 3D rod,
       [`jaxrod.rod3d.Rod3D`][], under the dead load F with friction at the contact point;
       perturbations as lateral velocities or offsets of its nodes) (static).
     - `n`: nodes (field; default `default_nodes` of the load: 128, or 384 past 32 unstable
@@ -58,7 +60,7 @@ class Scene(eqx.Module):
     rod: RodChannel
     dF: Float[Array, ""] = eqx.field(converter=float_leaf)
     perturbation: AbstractPerturbation = eqx.field(default_factory=lambda: SineVelocity(0.01, 6.0))
-    kind: str = eqx.field(static=True, default="field")
+    kind: str | AbstractRecipe = eqx.field(static=True, default="field")
     n: int | None = eqx.field(static=True, default=None)
     mode: int = eqx.field(static=True, default=6)
     dt: float | None = eqx.field(static=True, default=None)
@@ -72,7 +74,7 @@ class Scene(eqx.Module):
         if not (isinstance(self.mode, int) and self.mode >= 1):
             raise ValueError(f"mode = {self.mode!r} is invalid: expected an int >= 1.")
         if self.n is not None and not (isinstance(self.n, int) and self.n >= cls.min_size):
-            raise ValueError(f"n = {self.n!r} is invalid for the {self.kind} model: expected an int >= "
+            raise ValueError(f"n = {self.n!r} is invalid for the {name_of(self.kind)} model: expected an int >= "
                              f"{cls.min_size} ({cls.size_name}).")
         if self.dt is not None and not (isinstance(self.dt, (int, float)) and self.dt > 0):
             raise ValueError(f"dt = {self.dt!r} is invalid: expected a float > 0 [s].")
@@ -134,7 +136,7 @@ class Scene(eqx.Module):
             try:
                 return default_step(model, scheme=scheme)
             except jax.errors.ConcretizationTypeError:
-                raise ValueError(f"Scene.dt must be given explicitly for the {self.kind} model when the rod or the "
+                raise ValueError(f"Scene.dt must be given explicitly for the {name_of(self.kind)} model when the rod or the "
                                  "load is traced: the step is a static setting.") from None
 
         return self.recipe.step(model, self.rod, self.F, scheme_step)

@@ -140,3 +140,25 @@ def test_a_registered_model_and_perturbation_are_choices_of_the_command_line(reg
                  "--dF", str(DF), "--amplitude", str(1.1 * v_star), "--t1", "1.0", "--json"])
     out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert code == 0 and out["model"] == "beads" and out["buckled"] and out["n"] == 8
+
+
+def test_the_library_takes_a_recipe_object_that_no_name_was_registered_for(registered):
+    """Strings are for the edge: `Scene`, `SweepSpec` and the boundary searches take the recipe
+    itself; a recipe class never registered (`Unnamed`) runs the same answers as the named one."""
+
+    class Unnamed(BeadsRecipe):
+        pass
+
+    assert registry.name_of(Unnamed()) == "Unnamed" and registry.name_of(BeadsRecipe()) == "beads"
+    v_star = _closed_form()
+    pert = UniformVelocity(1.1 * v_star)
+    named = jr.Scene(ROD, DF, pert, kind="beads").run(t1=1.0, n_save=11)
+    mine = jr.Scene(ROD, DF, pert, kind=Unnamed()).run(t1=1.0, n_save=11)
+    assert bool(mine.buckled) and np.array_equal(np.asarray(mine.amplitude), np.asarray(named.amplitude))
+    spec = jr.SweepSpec(model=Unnamed(), perturbation="uniform-velocity", mu=0.3, dF=DF, t1=1.0)
+    assert spec.to_json()["model"] == "Unnamed"
+    res = jr.sweep(spec, {"amplitude": np.array([0.9, 1.1]) * v_star}, progress=False)
+    assert res.outputs["buckled"].tolist() == [False, True]
+    root, _ = jr.critical_velocity(ROD, DF, model=Unnamed(), perturbation="uniform-velocity", rtol=1e-6,
+                                   t1=1.0, sensitivities=())
+    assert abs(float(root.root) / v_star - 1) < 2e-3

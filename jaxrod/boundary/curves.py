@@ -15,6 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import theory
+from ..models.field import FieldRecipe
 from ..registry import make_perturbation, recipe
 from ..scene import Scene
 from .indicators import departure_sensitivities
@@ -114,7 +115,7 @@ def boundary_curve(rod, dFs, *, model="field", n=None, dt=None, mode=6, bracket=
         t1 = recipe(model).search_horizon
     kw = dict(model=model, mode=mode, rtol=rtol, max_iter=max_iter, t1=t1, method=method,
               sensitivities=sensitivities)
-    if continuation and _method_of(method, model) == "bisection" and model != "field":
+    if continuation and _method_of(method, model) == "bisection" and not isinstance(recipe(model), FieldRecipe):
         return _seeded_bisection(rod, dFs, bracket, width, n, dt, progress, **kw)
     if not (continuation and _method_of(method, model) == "departure"):
         if _method_of(method, model) != "exact":
@@ -226,7 +227,7 @@ def critical_load_curve(mus, amplitude, *, perturbation="sine", realizations=1, 
 
     mus = np.asarray(mus, float)
     overrides = dict(rod_overrides or {})
-    if seeded and _method_of(method, model, perturbation) == "bisection" and model != "field":
+    if seeded and _method_of(method, model, perturbation) == "bisection" and not isinstance(recipe(model), FieldRecipe):
         return _seeded_critical_load(mus, amplitude, bracket, width, n, dt, progress, perturbation=perturbation,
                                      realizations=realizations, seed=seed, model=model, mode=mode, rtol=rtol,
                                      max_iter=max_iter, t1=t1, overrides=overrides, sensitivities=sensitivities)

@@ -6,6 +6,7 @@ import numpy as np
 
 from ..modal import modal_spectrum
 from ..output import subplots
+from ..registry import name_of
 
 
 def plot_simulation(scene, sol, path: str | None = None):
@@ -28,7 +29,7 @@ def plot_simulation(scene, sol, path: str | None = None):
     ax0.set_xlabel("t [s]")
     ax0.set_ylabel("s [m]")
     verdict = f"buckled at t = {float(sol.t_buckle):.4g} s" if bool(sol.buckled) else "not buckled"
-    ax0.set_title(f"{scene.kind} model, F = {float(scene.F):.4g} N: {verdict}")
+    ax0.set_title(f"{name_of(scene.kind)} model, F = {float(scene.F):.4g} N: {verdict}")
     n_modes = min(40, theta.shape[1])
     grid = theta if _interior_nodes(s, float(scene.rod.L)) else _resample(s, theta, float(scene.rod.L))
     idx = np.flatnonzero(keep)

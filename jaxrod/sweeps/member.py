@@ -16,7 +16,7 @@ from .._results import RESULTS
 from ..integrators import default_for
 from ..integrators.base import RunOptions, save_grid
 from ..params import RodChannel
-from ..registry import make_perturbation, recipe
+from ..registry import make_perturbation, name_of, recipe
 from ..scene import Scene
 from .spec import ROD_FIELDS, SweepSpec, _STIFFNESS_FIELDS
 
@@ -140,14 +140,20 @@ def _static_resolution(spec: SweepSpec, flat: dict[str, np.ndarray]):
     dF = flat.get("dF", np.array([spec.dF]))
     dF_max = float(np.nanmax(np.where(np.isfinite(dF), dF, -np.inf)))
     key = None if values is None else tuple(map(tuple, values.tolist()))
-    return _resolution(json.dumps(spec.to_json(), sort_keys=True), tuple(stiff), key, dF_max)
+    return _resolution(json.dumps(spec.to_json(), sort_keys=True), spec.model, tuple(stiff), key, dF_max)
+
+
+def spec_of(spec_json: str, model) -> SweepSpec:
+    """The spec of `spec_json` (`SweepSpec.to_json`, the cached functions' key) with its `model`
+    (a name, or a recipe, which the JSON holds by name only)."""
+    return SweepSpec(**{**json.loads(spec_json), "model": model})
 
 
 @functools.lru_cache(maxsize=64)
-def _resolution(spec_json: str, stiff: tuple[str, ...], values, dF_max: float):
+def _resolution(spec_json: str, model, stiff: tuple[str, ...], values, dF_max: float):
     import jax.numpy as jnp_
 
-    spec = SweepSpec(**json.loads(spec_json))
+    spec = spec_of(spec_json, model)
 
     errors = []
 
@@ -186,7 +192,7 @@ def _check_given_step(spec: SweepSpec, scenes) -> None:
     models = [s.model() for s in scenes]
     limit = min(float(default_for(m, 1.0, s.scheme()).step_limit(m)) for m, s in zip(models, scenes))
     if not (0 < spec.dt < limit):
-        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model {spec.model!r}: the scheme's step limit "
+        raise ValueError(f"SweepSpec.dt = {spec.dt!r} s is invalid for model {name_of(spec.model)!r}: the scheme's step limit "
                          f"is {limit:.4g} s; use 0 < dt < {limit:.4g} s.")
 
 

@@ -17,7 +17,7 @@ import numpy as np
 from ..batching import DEFAULT_LANES, DEFAULT_REFILL_EVERY, run_pool
 from ..distributed import broadcast, gather, share
 from ..registry import recipe
-from .member import _engine_member, _make_member, _static_resolution
+from .member import _engine_member, _make_member, _static_resolution, spec_of
 from .result import SweepResult, _FILL
 from .spec import OUTPUTS, PARAMETERS, SweepSpec
 from .store import _atomic_write, _chunk_file, _dump_json, _fingerprint, _meta_file, _read_meta
@@ -207,9 +207,9 @@ def sweep(
 
     spec_json = json.dumps(spec.to_json(), sort_keys=True)
     if scheduling == "pool":
-        run_chunk = _pool_runner(spec_json, n, dt, grid_dt, scheme, lanes, refill_every)
+        run_chunk = _pool_runner(spec_json, spec.model, n, dt, grid_dt, scheme, lanes, refill_every)
     else:
-        run_chunk = _chunk_runner(spec_json, n, dt, grid_dt, scheme)
+        run_chunk = _chunk_runner(spec_json, spec.model, n, dt, grid_dt, scheme)
     base_key = jax.random.key(seed)
     mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()), ("batch",))
     sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("batch"))
@@ -279,11 +279,10 @@ def sweep(
 
 
 @functools.lru_cache(maxsize=16)
-def _chunk_runner(spec_json: str, n, dt, grid_dt, scheme):
+def _chunk_runner(spec_json: str, model, n, dt, grid_dt, scheme):
     """One jitted chunk function per (spec, resolution): repeated sweeps reuse its compilation
     (the seed and all swept values are arguments, not constants)."""
-    d = json.loads(spec_json)
-    member = _make_member(SweepSpec(**d), n, dt, grid_dt, scheme)
+    member = _make_member(spec_of(spec_json, model), n, dt, grid_dt, scheme)
 
     @jax.jit
     def run_chunk(params, idx, valid, base_key):
@@ -293,11 +292,11 @@ def _chunk_runner(spec_json: str, n, dt, grid_dt, scheme):
 
 
 @functools.lru_cache(maxsize=16)
-def _pool_runner(spec_json: str, n, dt, grid_dt, scheme, lanes: int, refill_every: int):
+def _pool_runner(spec_json: str, model, n, dt, grid_dt, scheme, lanes: int, refill_every: int):
     """One jitted chunk function with continuous batching: every device sets up its share of
     the chunk's members, runs them in `lanes` lanes ([`jaxrod.batching.run_pool`][]) and
     summarises them. Also returns the lane steps computed per device (for the utilisation)."""
-    setup, advance, finished, outputs = _engine_member(SweepSpec(**json.loads(spec_json)), n, dt, grid_dt, scheme)
+    setup, advance, finished, outputs = _engine_member(spec_of(spec_json, model), n, dt, grid_dt, scheme)
     mesh = jax.sharding.Mesh(np.asarray(jax.local_devices()), ("batch",))
     P = jax.sharding.PartitionSpec
 

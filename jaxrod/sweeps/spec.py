@@ -6,7 +6,8 @@ import dataclasses
 from collections.abc import Mapping
 
 
-from ..registry import perturbation_class, recipe
+from ..models.recipe import AbstractRecipe
+from ..registry import name_of, perturbation_class, recipe
 
 __all__ = ['ROD_FIELDS', 'PARAMETERS', 'OUTPUTS', 'SweepSpec']
 
@@ -26,9 +27,11 @@ OUTPUTS = ("buckled", "t_buckle", "dominant_mode", "max_theta", "final_theta", "
 
 @dataclasses.dataclass(frozen=True)
 class SweepSpec:
-    """Everything about a sweep except the swept values (all plain, JSON-serialisable).
+    """Everything about a sweep except the swept values (plain and JSON-serialisable, the model
+    by its name in `to_json`).
 
-    - `model`: "mode", "galerkin", "field" or "rod3d" (the full 3D rod, [`jaxrod.rod3d.Rod3D`][],
+    - `model`: the model's recipe (an `AbstractRecipe` instance, registered or not) or the name
+      of a registered one: "mode", "galerkin", "field" or "rod3d" (the full 3D rod, [`jaxrod.rod3d.Rod3D`][],
       under the dead load F⁰_m* + ΔF with friction at the contact point; `n` segments, default
       60; dt 0.5 of its explicit limit; `threshold` on max|θ| as for the other models).
     - `perturbation`: "sine", "random-velocity", "random-position" or "random-shape"
@@ -42,7 +45,7 @@ class SweepSpec:
     - `rod`: overrides of the reference rod's fields (e.g. `{"R": 0.01}`).
     """
 
-    model: str = "field"
+    model: str | AbstractRecipe = "field"
     perturbation: str = "sine"
     mu: float = 0.3
     dF: float = 5.0
@@ -58,7 +61,7 @@ class SweepSpec:
     def __post_init__(self):
         cls = recipe(self.model, "SweepSpec.model")
         if self.n is not None and not (isinstance(self.n, int) and self.n >= cls.min_size):
-            raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model {self.model!r}: expected an int >= "
+            raise ValueError(f"SweepSpec.n = {self.n!r} is invalid for model {name_of(self.model)!r}: expected an int >= "
                              f"{cls.min_size} {cls.size_name or ''}".rstrip() + ".")
         perturbation_class(self.perturbation, "SweepSpec.perturbation")
         if not (isinstance(self.t1, (int, float)) and self.t1 > 0):
@@ -69,6 +72,7 @@ class SweepSpec:
 
     def to_json(self) -> dict:
         d = dataclasses.asdict(self)
+        d["model"] = name_of(self.model)  # a recipe by its registered name (or its class's)
         d["rod"] = dict(self.rod)
         return d
 
