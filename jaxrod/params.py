@@ -5,12 +5,15 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, ArrayLike, Float
+from jaxtyping import Array, ArrayLike, Bool, Float
 
 from ._numerics import concrete_value as _concrete, float_leaf, format_value as _fmt
 
 __all__ = ["RodChannel"]
+
+_POSITIVE = {"L": "m", "d": "m", "E": "Pa", "rho_v": "kg/m^3", "R": "m", "g": "m/s^2"}  # fields > 0 [unit]
 
 
 class RodChannel(eqx.Module):
@@ -51,15 +54,7 @@ class RodChannel(eqx.Module):
     mu_d: Float[Array, "..."] = eqx.field(converter=float_leaf)
 
     def __check_init__(self):
-        positive = {
-            "L": "m",
-            "d": "m",
-            "E": "Pa",
-            "rho_v": "kg/m^3",
-            "R": "m",
-            "g": "m/s^2",
-        }
-        for name, unit in positive.items():
+        for name, unit in _POSITIVE.items():
             v = _concrete(getattr(self, name))
             if v is not None and not (np.all(np.isfinite(v)) and np.all(v > 0)):
                 raise ValueError(
@@ -84,6 +79,20 @@ class RodChannel(eqx.Module):
                 f"RodChannel.mu_d = {_fmt(mu_d)} is invalid: the dynamic coefficient must lie "
                 f"in [0, mu_s] with mu_s = {_fmt(mu_s)}."
             )
+
+    def valid(self) -> Bool[Array, ""]:
+        """The rules of the construction's check as one traced boolean (every member): for values
+        traced under `jit`/`vmap`, which the construction cannot check (a sweep's members, a
+        model's `check` for its result code). The one definition of a valid rod besides the
+        construction's messages."""
+        ok = jnp.array(True)
+        for name in _POSITIVE:
+            v = getattr(self, name)
+            ok &= jnp.all(jnp.isfinite(v) & (v > 0))
+        ok &= jnp.all((self.nu > -1.0) & (self.nu < 0.5))
+        for v in (self.mu_s, self.mu_d):
+            ok &= jnp.all(jnp.isfinite(v) & (v >= 0))
+        return ok & jnp.all(self.mu_d <= self.mu_s)
 
     @classmethod
     def reference(cls, mu: ArrayLike = 0.3, **overrides) -> RodChannel:

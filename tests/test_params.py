@@ -54,6 +54,26 @@ def test_bad_input_names_field_value_and_range(field, value, fragment):
     assert fragment in msg
 
 
+BAD = [("L", 0.0), ("L", float("nan")), ("d", -1e-3), ("E", float("inf")), ("rho_v", 0.0), ("R", -5e-3),
+       ("g", 0.0), ("nu", 0.5), ("nu", -1.0), ("mu_s", -0.1), ("mu_d", -0.1), ("mu_s", float("nan")), ("mu_d", 0.5)]
+
+
+def test_the_traced_validity_is_the_constructions_check():
+    """`RodChannel.valid` (for traced values: sweeps, the models' `check`) refuses exactly what the
+    construction refuses (one definition of a valid rod), member by member under vmap."""
+    good = jr.RodChannel.reference(mu=0.3)
+    fields = ("L", "d", "E", "rho_v", "nu", "R", "g", "mu_s", "mu_d")
+    for field, value in BAD:
+        with pytest.raises(ValueError):
+            jr.RodChannel.reference(mu=0.3, **{field: value})
+    values = {f: jnp.asarray([float(getattr(good, f))] * (len(BAD) + 1)) for f in fields}
+    for i, (field, value) in enumerate(BAD):
+        values[field] = values[field].at[i].set(value)
+    valid = jax.jit(jax.vmap(lambda v: jr.RodChannel(**v).valid()))(values)
+    assert valid.tolist() == [False] * len(BAD) + [True]
+    assert bool(jr.FieldModel.from_rod(good, 8, dF=1.0).check())
+
+
 def test_dynamic_above_static_friction_is_rejected():
     with pytest.raises(ValueError, match=r"RodChannel.mu_d = 0.5 .*\[0, mu_s\].*0.3"):
         jr.RodChannel.reference(mu_s=0.3, mu_d=0.5)

@@ -133,9 +133,7 @@ class AbstractRodDOFModel(AbstractDOFModel):
         return self.threshold
 
     def check(self):
-        r = self.rod
-        ok = (r.mu_s >= 0) & (r.mu_d >= 0) & (r.mu_d <= r.mu_s) & (r.R > 0) & (r.EI > 0)
-        return ok & jnp.isfinite(self.load(0.0))
+        return self.rod.valid() & jnp.isfinite(self.load(0.0))  # the rod's rules, once (`RodChannel.valid`)
 
 
 def _forward(name):

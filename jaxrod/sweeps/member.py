@@ -35,10 +35,8 @@ def _member_rod(spec: SweepSpec, p: Mapping[str, jax.Array]) -> RodChannel:
 
 
 def _valid(rod: RodChannel, p) -> jax.Array:
-    pos = [rod.L, rod.d, rod.E, rod.rho_v, rod.R, rod.g]
-    ok = jnp.all(jnp.stack([jnp.isfinite(x) & (x > 0) for x in pos]))
-    ok &= (rod.nu > -1) & (rod.nu < 0.5)
-    ok &= jnp.isfinite(rod.mu_s) & jnp.isfinite(rod.mu_d) & (rod.mu_d >= 0) & (rod.mu_d <= rod.mu_s)
+    """A member's rod by `RodChannel.valid`, and its load and amplitude finite (the amplitude ≥ 0)."""
+    ok = rod.valid()
     for k in ("dF", "amplitude"):
         if k in p:
             ok &= jnp.isfinite(p[k])
