@@ -35,13 +35,12 @@ def single_mode_indicator(Adot0, k, f_s, f_d, A0=0.0, horizon: float = 10.0):
 def rod_indicator(scene: Scene, t1: float = 0.5):
     """g = log(max|θ(T)|/θ_c) of a scene at T = `t1` [s], with the buckling stop lifted (the run
     still stops when the rod is stuck: it stays stuck)."""
-    q0, v0 = scene.initial_state()
-    model = scene.model()
+    problem = scene.resolve()  # the model built once
     sol = simulate(
-        model, scene.integrator(), q0, v0, t1, n_save=101,
+        problem.model, problem.integrator, problem.q0, problem.v0, t1, n_save=101,
         options=RunOptions(buckle_threshold=1e200, save_state=False), throw=False,
     )
-    amp = model.amplitude(sol.q_final)
+    amp = problem.model.amplitude(sol.q_final)
     return jnp.log(jnp.maximum(amp, 1e-300) / scene.threshold)
 
 
@@ -61,10 +60,10 @@ def crossing_state(scene: Scene, t1: float = 2.0, tangents: bool = False):
     whichever comes first, so that both labels are cheap. Differentiable (forward mode) in every
     leaf of the scene at a fixed step count; with `tangents`, the model is
     `AbstractModel.for_tangents` (what a forward-mode run needs)."""
-    q0, v0 = scene.initial_state()
-    model = scene.model().for_tangents() if tangents else scene.model()
+    problem = scene.resolve()  # the model built once
+    model = problem.model.for_tangents() if tangents else problem.model
     sol = simulate(
-        model, scene.integrator(), q0, v0, t1, n_save=201,
+        model, problem.integrator, problem.q0, problem.v0, t1, n_save=201,
         options=RunOptions(buckle_threshold=scene.threshold, save_state=False), throw=False,
     )
     return (sol.q_final, sol.v_final), run_label(sol)

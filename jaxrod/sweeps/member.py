@@ -83,9 +83,9 @@ def _engine_member(spec: SweepSpec, n: int | None, dt: float, grid_dt: float, sc
         pert = make_perturbation(spec.perturbation, amp, spec.mode, key, spec.duration)
         scene = Scene(safe, dF, pert, spec.model, n, spec.mode, dt, threshold=spec.threshold,
                       grid_dt=grid_dt)
-        model = scene.model()
-        q0, v0 = scene.initial_state()
-        return ok, model, integrator(model).start(model, q0, v0, opts)
+        problem = scene.resolve()  # the member's model, built once, and its initial state
+        model = problem.model
+        return ok, model, integrator(model).start(model, problem.q0, problem.v0, opts)
 
     def advance(model, run):
         return integrator(model).advance(model, run, jnp.asarray(h, run.t.dtype), m, N_SAVE, opts)
