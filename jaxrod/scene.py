@@ -18,11 +18,11 @@ from .integrators.base import RunOptions
 from .models.dof import DT_FRACTION, static_float
 from .models.field import DEFAULT_NODES, FieldModel, default_nodes
 from .models.galerkin import DEFAULT_MODES
-from .params import RodChannel
 from .models.recipe import AbstractRecipe
+from .params import RodChannel
 from .perturbations import AbstractPerturbation, SineVelocity
-from .registry import model_names, name_of, perturbation_names, recipe
 from .problem import DEFAULT_T1, Problem
+from .registry import model_names, name_of, perturbation_names, recipe
 
 __all__ = ["Scene", "MODELS", "PERTURBATIONS", "DEFAULT_NODES", "DEFAULT_MODES", "DEFAULT_T1",
            "default_nodes", "scheme_for"]
@@ -123,8 +123,9 @@ class Scene(eqx.Module):
 
     def step(self, model=None, scheme: str | None = None) -> float:
         """The fixed step [s], static, from the rod's concrete values: `dt`, or the recipe's
-        `step` of `model` (default: `model()`) under `scheme` (default: `scheme()`) (the reduced rod models: 0.4 of the stability limit at ΔF = 0 and at most
-        0.25/λ_max; the single mode 1e-4 s; the 3D rod its scheme's default step)."""
+        `step` of `model` (default: `model()`) under `scheme` (default: `scheme()`): the reduced
+        rod models 0.4 of the stability limit at ΔF = 0 and at most 0.25/λ_max; the single mode
+        1e-4 s; the 3D rod its scheme's default step."""
         if self.dt is not None:
             return float(self.dt)
         from .integrators import default_step
