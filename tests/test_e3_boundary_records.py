@@ -134,7 +134,7 @@ def test_e3_searches_the_settings_loads_and_writes_the_boundary_under_its_scheme
     tolerance and horizon and the runs file under `out`; the boundary is written under a name
     holding n and the scheme; the summary reports the exponents beside the paper's and counts
     the runs and the bracketed points."""
-    from jaxrod.experiments._paper3d import SIZES
+    from jaxrod.experiments.paper3d import SIZES
 
     seen = {}
     res = dict(scheme="implicit", exponent_rod3d=-0.48, exponent_rod3d_stderr=0.02, exponent_field=-0.51,

@@ -1,7 +1,7 @@
 """The 3D rod's experiment drivers in the default suite: E1's displacement-controlled runs
 (`experiments.rod3d.e1_curves`, one tiny compiled batch of 4 segments), and the bookkeeping of
 E6's full-model check, the rolling check, the critical-velocity cross-check and E4/E5/E6C with the
-3D rod (`experiments._paper3d` and `e4/e5/e6.rod3d`). Those drivers take minutes of compiled 3D
+3D rod (`experiments.paper3d` and `e4/e5/e6.rod3d`). Those drivers take minutes of compiled 3D
 runs (their end-to-end checks are `slow`: tests/test_rod3d_cli.py, tests/test_reproduce.py), so
 here their runs and searches are replaced by stand-ins whose answers the test fixes, and the test
 checks what each driver reports and writes from them: the parameters it ran, the statistics it
@@ -22,7 +22,7 @@ import pytest
 import jaxrod as jr
 from jaxrod import theory
 from jaxrod._results import RESULTS
-from jaxrod.experiments import _paper3d as p3
+from jaxrod.experiments import paper3d as p3
 from jaxrod.experiments import rod3d as exp3d
 from jaxrod.integrators import default_step
 from jaxrod.rod3d import Rod3D, sine_velocity, step_limit
@@ -398,7 +398,7 @@ def test_crosscheck_stops_on_a_failed_run_naming_its_amplitude(monkeypatch):
         _crosscheck(monkeypatch, lambda v: False, failed_at=2, progress=False)
 
 
-# ---------------------------------------------------------------- _paper3d helpers
+# ---------------------------------------------------------------- paper3d helpers
 
 
 def test_settings_are_a_copy_of_the_size_with_n_replaced():

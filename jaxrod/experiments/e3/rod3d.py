@@ -32,7 +32,7 @@ from ...perturbations import SineVelocity
 from ...scene import Scene
 from ...output import write_csv
 from ...stability_map import fit_power_law
-from .._paper3d import PAPER_E3_EXPONENT, _settings
+from ..paper3d import PAPER_E3_EXPONENT, _settings
 
 __all__ = ["boundary_3d", "label_3d", "plot_boundary_3d", "RUN_COLUMNS", "e3", "write_boundary"]
 

@@ -1,4 +1,4 @@
-"""E4 with the full model: the critical load ΔF*(μ) of the 3D rod at the paper's 500 segments, beside the field model's (`jaxrod reproduce e4 --model rod3d`); the settings are in `jaxrod.experiments._paper3d`. docs/paper.md, "The experiments with the 3D rod", gives the method and the results."""
+"""E4 with the full model: the critical load ΔF*(μ) of the 3D rod at the paper's 500 segments, beside the field model's (`jaxrod reproduce e4 --model rod3d`); the settings are in `jaxrod.experiments.paper3d`. docs/paper.md, "The experiments with the 3D rod", gives the method and the results."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from ...output import subplots, write_csv
-from .._paper3d import (WIDTH, E4_CASES, FIELD_TOP, FIELD_NODES, E4_COLUMNS, E5_COLUMNS, E6_COLUMNS, _settings, _Points, _critical_load, _best, _modes, _theta_3d, _final_theta, _found, _e4_points)
+from ..paper3d import (WIDTH, E4_CASES, FIELD_TOP, FIELD_NODES, E4_COLUMNS, E5_COLUMNS, E6_COLUMNS, _settings, _Points, _critical_load, _best, _modes, _theta_3d, _final_theta, _found, _e4_points)
 
 def e4_point(case, mu, realization, n, t1=0.5, width=WIDTH, rtol=1e-2) -> dict:
     """One E4 point: ΔF* [N] of the field model (to 1e-4) and of the 3D rod of `n` segments (label

@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from ...output import subplots, write_csv
-from .._paper3d import (WIDTH, E4_CASES, FIELD_TOP, FIELD_NODES, E4_COLUMNS, E5_COLUMNS, E6_COLUMNS, _settings, _Points, _critical_load, _best, _modes, _theta_3d, _final_theta, _found, _e4_points)
+from ..paper3d import (WIDTH, E4_CASES, FIELD_TOP, FIELD_NODES, E4_COLUMNS, E5_COLUMNS, E6_COLUMNS, _settings, _Points, _critical_load, _best, _modes, _theta_3d, _final_theta, _found, _e4_points)
 
 def e6c(out, quick=False, progress=True, n=None) -> dict:
     """E6C with the 3D rod at `n` segments: `rod3d_random_position_n{n}.csv` under `out`."""
