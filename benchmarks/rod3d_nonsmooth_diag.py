@@ -15,6 +15,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py adaptive-steps --n 60 500            # the error-controlled step on E4 C
     python benchmarks/rod3d_nonsmooth_diag.py b-ends --scheme coupled               # E4 B's bracket ends, one scheme
     python benchmarks/rod3d_nonsmooth_diag.py b-decay --scheme coupled --dt 1e-5 5e-6  # E4 B's first 0.1 s: energy, stick
+    python benchmarks/rod3d_nonsmooth_diag.py spin                                 # a free spinning rod's angular momentum
     python benchmarks/rod3d_nonsmooth_diag.py vstar --scheme coupled --n 60 --dF 5 20
     python benchmarks/rod3d_nonsmooth_diag.py modes --n 500 --dF 40 60            # the straight rod's spectrum
 
@@ -327,6 +328,32 @@ def b_decay(args):
                               result=int(sol.result), wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
 
+def spin(args):
+    """A free 4-segment rod in space spinning (tests/test_rod3d.py's `_spinning_free_rod`), run for
+    1000 explicit limits: the largest drift of its angular momentum about the origin relative to
+    |L|, by the explicit leapfrog and by the implicit step without γ (local pass) at each
+    `--fractions` of the explicit limit."""
+    import sys
+
+    sys.path.insert(0, "tests")
+    from test_rod3d import _momenta, _spinning_free_rod
+    from jaxrod.rod3d import step_limit
+
+    model, q0, v0 = _spinning_free_rod()
+    lim = float(step_limit(model))
+    opts = jr.RunOptions(stop_on_buckle=False, stop_when_stuck=False)
+    for name in ("explicit", "implicit"):
+        for f in args.fractions:
+            if name == "explicit" and f >= 1:
+                continue
+            integ = jr.ProjectedLeapfrog(f * lim) if name == "explicit" else ImplicitLeapfrog(f * lim, gamma=0.0)
+            sol = jr.simulate(model, integ, q0, v0, 1000 * lim, n_save=11, options=opts)
+            _, ang = (np.asarray(a) for a in _momenta(model, sol.q, sol.v))
+            print(json.dumps(dict(what="free spinning 4-segment rod: angular momentum drift / |L| over 1000 limits",
+                                  scheme=name, step_over_limit=f, limit=lim, t1=1000 * lim, result=int(sol.result),
+                                  drift=float(np.abs(ang - ang[0]).max() / np.linalg.norm(ang[0])))), flush=True)
+
+
 def gamma_layer(args):
     """E3's start on 12 segments (sine mode 6 at 0.02 m/s on the nodes, segments not turning, F⁰₆ + 5 N,
     μ = 0.3) to 0.02 s: the largest lateral node displacement's difference from the explicit
@@ -396,13 +423,15 @@ def main():
     p.add_argument("--gamma", type=float, default=0.0)
     p.add_argument("--dt", type=float, nargs="+", default=[1e-5, 5e-6])
     p.add_argument("--t1", type=float, default=0.1)
+    p = sub.add_parser("spin")
+    p.add_argument("--fractions", type=float, nargs="+", default=[0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 5.0])
     p = sub.add_parser("modes")
     p.add_argument("--n", type=int, default=500)
     p.add_argument("--dF", type=float, nargs="+", default=[40.0, 60.0])
     args = ap.parse_args()
     {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes,
      "gamma-layer": gamma_layer, "e4-gates": e4_gates, "adaptive-steps": adaptive_steps,
-     "b-ends": b_ends, "b-decay": b_decay}[args.cmd](args)
+     "b-ends": b_ends, "b-decay": b_decay, "spin": spin}[args.cmd](args)
 
 
 if __name__ == "__main__":
