@@ -334,3 +334,26 @@ def test_a_scene_run_and_the_simulate_command_build_the_model_once(monkeypatch, 
     calls.clear()
     assert main(["simulate", "--model", "field", "--n", "16", "--t1", "0.01", "--json"]) == 0
     assert len(calls) == 1 and '"model": "field"' in capsys.readouterr().out
+
+
+def test_a_forced_model_forwards_every_member_of_the_interface_to_its_inner_model():
+    """`under_lateral_force` wraps a per-DOF model: every method and property of `AbstractModel`
+    is the inner model's (a new interface member is forwarded without a hand-written list), but
+    the accelerations, which add the force."""
+    from jaxrod.models.base import AbstractModel
+    from jaxrod.models.dof import _Forced
+
+    members = {k for k, v in vars(AbstractModel).items()
+               if not k.startswith("_") and (callable(v) or isinstance(v, property))}
+    assert members <= set(vars(_Forced)) and not _Forced.__abstractmethods__
+    inner = jr.GalerkinModel.from_rod(ROD, 4, dF=5.0)
+    force = jnp.linspace(0.0, 1.0, inner.sample_points().shape[0])
+    forced = inner.under_lateral_force(force)
+    q, v = jnp.full(4, 0.01), jnp.full(4, 0.2)
+    extra = inner.from_samples(force / (ROD.rho * ROD.R))
+    np.testing.assert_allclose(forced.accelerations(q, v, 0.0), inner.accelerations(q, v, 0.0) + extra, rtol=1e-12)
+    for name in ("kinetic_energy", "amplitude"):
+        assert float(getattr(forced, name)(v)) == float(getattr(inner, name)(v))
+    np.testing.assert_array_equal(forced.friction_acceleration(jr.Tanh(1e-3), v, 0.0),  # Galerkin's own projection
+                                  inner.friction_acceleration(jr.Tanh(1e-3), v, 0.0))
+    assert (forced.autonomous, forced.resolved_modes) == (inner.autonomous, inner.resolved_modes)

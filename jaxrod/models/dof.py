@@ -136,13 +136,10 @@ class AbstractRodDOFModel(AbstractDOFModel):
         return self.rod.valid() & jnp.isfinite(self.load(0.0))  # the rod's rules, once (`RodChannel.valid`)
 
 
-def _forward(name):
-    return lambda self, *args, **kwargs: getattr(self.inner, name)(*args, **kwargs)
-
-
 class _Forced(AbstractModel):
-    """A model with a constant extra acceleration `extra` (`under_lateral_force`): every method
-    of the interface is the inner model's, the accelerations plus `extra`."""
+    """A model with a constant extra acceleration `extra` (`under_lateral_force`): every member of
+    the interface is the inner model's (forwarded below, from `AbstractModel`'s own list), the
+    accelerations plus `extra`."""
 
     inner: AbstractModel
     extra: Float[Array, " n"]
@@ -160,15 +157,20 @@ class _Forced(AbstractModel):
         return _Forced(self.inner.for_tangents(), self.extra)
 
     rod = property(lambda self: self.inner.rod)
-    autonomous = property(lambda self: self.inner.autonomous)
-    buckle_threshold = property(lambda self: self.inner.buckle_threshold)
-    resolved_modes = property(lambda self: self.inner.resolved_modes)
-    (friction_bounds, energy_terms, kinetic_energy, max_frequency, linear_flow, check, kick, drift,
-     friction_update, friction_acceleration, impulse_work, amplitude, is_stuck, stop_measures, observables,
-     sample_points, from_samples, perturbed_state, translation) = map(_forward, (
-        "friction_bounds", "energy_terms", "kinetic_energy", "max_frequency", "linear_flow", "check", "kick",
-        "drift", "friction_update", "friction_acceleration", "impulse_work", "amplitude", "is_stuck",
-        "stop_measures", "observables", "sample_points", "from_samples", "perturbed_state", "translation"))
+
+
+def _forwarded(name, member):
+    """`name` of `_Forced` as its inner model's: a property read through, a method called through."""
+    if isinstance(member, property):
+        return property(lambda self: getattr(self.inner, name))
+    return lambda self, *args, **kwargs: getattr(self.inner, name)(*args, **kwargs)
+
+
+for _name, _member in vars(AbstractModel).items():  # the interface's methods and properties, but _Forced's own
+    if not _name.startswith("_") and (callable(_member) or isinstance(_member, property)) and _name not in vars(_Forced):
+        setattr(_Forced, _name, _forwarded(_name, _member))
+del _name, _member
+abc.update_abstractmethods(_Forced)  # every abstract member is now forwarded
 
 
 class RodDOFRecipe(AbstractRecipe):
