@@ -15,7 +15,7 @@ from __future__ import annotations
 import importlib
 
 __all__ = ["register_model", "register_perturbation", "recipe", "model_class", "perturbation_class", "model_names",
-           "perturbation_names", "name_of", "name_of_model", "recipe_of", "make_perturbation"]
+           "perturbation_names", "name_of", "name_of_model", "make_perturbation"]
 
 # name -> recipe (models) or class (perturbations), or "module:attribute" for a class imported
 # when first asked for (a recipe class is made into its instance)
@@ -130,10 +130,6 @@ def name_of_model(cls) -> str:
             return name
     raise ValueError(f"model class {cls!r} is not registered.")
 
-
-def recipe_of(model):
-    """The registered recipe of the model `model` (an instance of a registered model class)."""
-    return recipe(name_of_model(type(model)))
 
 
 def make_perturbation(kind: str, amplitude, mode: int = 6, key=None, duration=1e-3):
