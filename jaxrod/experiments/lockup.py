@@ -41,10 +41,12 @@ SETTINGS = {
     # groups: (L/ℓ, far-load lanes' μL/ℓ, the lock-up lane's first μL/ℓ, "auto" or None);
     # runs: (segments per buckle wavelength, push speed [m/s]) — the base, twice the segments, half and a quarter
     # of the speed; every lane runs at the base, the lanes in `converge` (μL/ℓ, or "lock" for the lock-up lane) at all;
-    # refine: (L/ℓ, μL/ℓ) lanes that also run at four times the base's segments (their n against 2n failed)
+    # refine: (L/ℓ, μL/ℓ, (segments per wave, push speed)) lanes that also run at that setting: four times the
+    # base's segments (their n against 2n failed), or twice them at half the speed (the segment test where the
+    # speed moves the answer)
     False: dict(groups=((2.0, (0.5, 1.0, 1.5, 2.0), None), (4.0, (3.0, 4.0), "auto")), f_c=6.0,
                 runs=((16, 10e-3), (32, 10e-3), (16, 5e-3), (16, 2.5e-3)), converge=(0.5, 1.0, 1.5, 2.0, 3.0, "lock"),
-                refine=((2.0, 0.5), (4.0, 3.0)),
+                refine=((2.0, 0.5, (64, 10e-3)), (4.0, 3.0, (64, 10e-3)), (4.0, 3.0, (32, 5e-3))),
                 first_push=0.4, stage_push=0.15, max_stages=16, saves_per_stage=41),
     True: dict(groups=((2.0, (0.5, 1.0, 2.0), None),), f_c=6.0, runs=((16, 10e-3),), first_push=0.4,
                stage_push=0.15, max_stages=8, saves_per_stage=41),
@@ -75,7 +77,7 @@ def _closed(rod, X, f_c):
 
 def _jobs(S):
     """(group, run) of every staircase of the setting: each group at the base run, its lanes in
-    `converge` at the others, and the lanes in `refine` at four times the base's segments."""
+    `converge` at the others, and the lanes in `refine` at their own settings."""
     conv = S.get("converge")
     for Lx, Xs, lock in S["groups"]:
         for k, run in enumerate(S["runs"]):
@@ -85,9 +87,8 @@ def _jobs(S):
                 if not xs and lk is None:
                     continue
             yield (Lx, xs, lk), run
-    w0, v0 = S["runs"][0]
-    for Lx, X in S.get("refine", ()):
-        yield (Lx, (X,), None), (4 * w0, v0)
+    for Lx, X, run in S.get("refine", ()):
+        yield (Lx, (X,), None), run
 
 
 _STAGE_KEYS = ("f_c", "first_push", "stage_push", "saves_per_stage")
