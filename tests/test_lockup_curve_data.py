@@ -77,7 +77,7 @@ def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_
 
     def typed(row):
         out = dict(row)
-        for k in ("muL_over_ell", "push_speed", "lo", "hi"):
+        for k in ("muL_over_ell", "push_speed", "lo", "hi", "crossing", "crossing_error"):
             out[k] = float(row[k])
         out["segments_per_wave"] = int(row["segments_per_wave"])
         return out
@@ -91,17 +91,43 @@ def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_
         ("muL_lock", "nan")]
     for row, mine in zip(committed, again):
         assert row["segments_pair"] == mine["segments_pair"]
-        for k in ("quasi_static", "error_bar", "d_segments", "d_half_speed", "d_quarter_speed", "lo", "hi"):
+        for k in ("quasi_static", "error_bar", "d_segments", "d_half_speed", "d_quarter_speed", "lo", "hi",
+                  "bracket_lo", "bracket_hi"):
             assert float(row[k]) == pytest.approx(mine[k], rel=1e-12), (row["muL_over_ell"], k)
         assert (row["converged_segments"], row["converged_speed"]) == (
             str(int(mine["converged_segments"])), str(int(mine["converged_speed"])))
     readme = (ROOT / "README.md").read_text()
     ok = [r for r in committed if r["converged_segments"] == "1" and r["converged_speed"] == "1"]
-    assert [(r["quantity"], r["muL_over_ell"]) for r in ok] == [("F_far_max", "0.5"), ("F_far_max", "1.0"),
-                                                                  ("F_far_max", "2.0"), ("muL_lock", "nan")]
+    assert [(r["quantity"], r["muL_over_ell"]) for r in ok] == [(r["quantity"], r["muL_over_ell"]) for r in committed]
     assert [r["segments_pair"] for r in committed] == ["64/32", "32/16", "32/16", "32/16", "64/32", "32/16"]
     for r in ok:
         assert f"{float(r['quasi_static']):.3f} ± {float(r['error_bar']):.3f}" in readme
+
+
+def test_every_run_rows_crossing_is_read_from_its_own_stages():
+    """The `crossing` and `crossing_error` of each staircase run row of curve.csv are
+    `jaxrod.lockup.staircase.crossing` of that run's stages in stages.csv (the same lane, segments
+    and speed), and the crossing lies inside the run's bracket where it is closed."""
+    from jaxrod.lockup.staircase import crossing
+
+    stages = _rows("stages.csv")
+    runs = [r for r in _rows("curve.csv") if r["kind"] == "run" and r["protocol"] == "staircase"]
+    read = 0
+    for row in runs:
+        far = row["quantity"] == "F_far_max"
+        mine = [dict(s, parameter=float(s["parameter"]), f_in=float(s["f_in"])) for s in stages
+                if s["n_segments"] == row["n_segments"] and s["push_speed"] == row["push_speed"]
+                and s["varies"] == ("far_load" if far else "mu") and (not far or s["muL_over_ell"] == row["muL_over_ell"])]
+        got = crossing(mine, float(row["entry_force_bound"]))
+        if got is None:
+            assert row["crossing"] == "nan", row
+            continue
+        read += 1
+        assert (float(row["crossing"]), float(row["crossing_error"])) == (pytest.approx(got[0], rel=1e-12),
+                                                                          pytest.approx(got[1], rel=1e-9, abs=1e-15))
+        if row["status"] == "bracketed":
+            assert float(row["lo"]) <= got[0] <= float(row["hi"]), row
+    assert read == len(runs) - 1  # all but μL/ℓ = 4, past the lock-up length
 
 
 def test_a_single_step_to_the_far_load_slides_at_a_higher_entry_force_than_the_staircase():

@@ -23,7 +23,7 @@ from jaxrod.experiments import lockup as lx
 from jaxrod.lockup import closed_forms as cf
 from jaxrod.lockup.laws import helix_against_laws
 from jaxrod.lockup.push import inject_lanes, push_rod, units
-from jaxrod.lockup.staircase import BELOW_START, BRACKETED, WIDE, _next, _stage_rule, staircase
+from jaxrod.lockup.staircase import BELOW_START, BRACKETED, WIDE, _next, _stage_rule, crossing, staircase
 from jaxrod.lockup.verdict import LOCKED, SLIDING, Criterion, verdict
 
 jax.config.update("jax_enable_x64", True)
@@ -108,28 +108,29 @@ def test_the_jobs_are_each_group_at_the_base_run_and_its_converge_lanes_at_the_o
         ((3.0, (2.0,), None), (12, 0.02))]
 
 
-def _run_row(X, w, v, lo, hi, quantity="F_far_max", status="bracketed"):
+def _run_row(X, w, v, c, e=0.01, quantity="F_far_max", status="bracketed"):
+    """A run row crossing the bound at `c` with interpolation error `e`, inside a 2 % bracket."""
     return dict(quantity=quantity, muL_over_ell=X, n_segments=2 * w, push_speed=v, protocol="staircase", kind="run",
-                lo=lo, hi=hi, status=status, segments_per_wave=w)
+                lo=c - 0.01 * c, hi=c + 0.01 * c, crossing=c, crossing_error=e, status=status, segments_per_wave=w)
 
 
 def test_the_converged_value_is_the_quarter_speeds_or_extrapolated_to_zero_speed_with_its_error_bar():
-    """Midpoints 2.00 (v), 2.10 (v/2), 2.14 (v/4) and 2.035 at twice the segments, half-widths
-    0.01: v/4 is +1.9 % on v/2, not converged at 1 %: extrapolated linearly through v/2, v/4 to
-    2.18; the quadratic through all three gives (8·2.14 − 6·2.10 + 2)/3 = 2.1733…; bar =
+    """Crossings 2.00 (v), 2.10 (v/2), 2.14 (v/4) and 2.035 at twice the segments, interpolation
+    errors 0.01: v/4 is +1.9 % on v/2, not converged at 1 %: extrapolated linearly through v/2, v/4
+    to 2.18; the quadratic through all three gives (8·2.14 − 6·2.10 + 2)/3 = 2.1733…; bar =
     |2.18 − 2.1733| + (2·0.01 + 0.01) + |2.035 − 2.00|. Segments +1.75 % (converged at 2 %), half
     speed +5 %. At μL/ℓ = 2, v/4 +0.5 % on v/2: converged in speed, the value is v/4's 1.015, its
-    bar |1.015 − 1.01| + 0.01 + 0.025 (twice the segments 1.035 against 1.01: +2.5 %, not converged). A
-    point with a run unbracketed or missing gets no row; the lock-up length's point (μL/ℓ NaN)
-    is one point."""
+    bar |1.015 − 1.01| + 0.01 + 0.025 (twice the segments 1.035 against 1.01: +2.5 %, not converged),
+    its bracket v/4's. A point with a run without a crossing or missing gets no row; the lock-up
+    length's point (μL/ℓ NaN) is one point."""
     S = dict(runs=((16, 0.01), (32, 0.01), (16, 0.005), (16, 0.0025)))
-    rows = [_run_row(1.0, 16, 0.01, 1.99, 2.01), _run_row(1.0, 32, 0.01, 2.025, 2.045),
-            _run_row(1.0, 16, 0.005, 2.09, 2.11), _run_row(1.0, 16, 0.0025, 2.13, 2.15),
-            _run_row(2.0, 16, 0.01, 1.0, 1.02), _run_row(2.0, 32, 0.01, 1.025, 1.045),
-            _run_row(2.0, 16, 0.005, 1.0, 1.02), _run_row(2.0, 16, 0.0025, 1.005, 1.025),
-            _run_row(3.0, 16, 0.01, 1.0, 1.02), _run_row(3.0, 32, 0.01, 1.0, 1.02),
-            _run_row(3.0, 16, 0.005, 1.0, 1.02), _run_row(3.0, 16, 0.0025, 1.0, math.nan, status="open")]
-    rows += [_run_row(math.nan, w, v, 2.9, 2.96, quantity="muL_lock") for w, v in S["runs"]]
+    rows = [_run_row(1.0, 16, 0.01, 2.00), _run_row(1.0, 32, 0.01, 2.035),
+            _run_row(1.0, 16, 0.005, 2.10), _run_row(1.0, 16, 0.0025, 2.14),
+            _run_row(2.0, 16, 0.01, 1.01), _run_row(2.0, 32, 0.01, 1.035),
+            _run_row(2.0, 16, 0.005, 1.01), _run_row(2.0, 16, 0.0025, 1.015),
+            _run_row(3.0, 16, 0.01, 1.01), _run_row(3.0, 32, 0.01, 1.01),
+            _run_row(3.0, 16, 0.005, 1.01), _run_row(3.0, 16, 0.0025, math.nan, status="open")]
+    rows += [_run_row(math.nan, w, v, 2.93, 0.004, quantity="muL_lock") for w, v in S["runs"]]
     one, two, lock = lx.converged(rows, S)
     assert (one["quantity"], one["muL_over_ell"], one["kind"], one["push_speed"]) == ("F_far_max", 1.0, "converged", 0.0)
     assert one["status"] == "extrapolated to v = 0" and one["quasi_static"] == pytest.approx(2.18, abs=1e-12)
@@ -137,12 +138,13 @@ def test_the_converged_value_is_the_quarter_speeds_or_extrapolated_to_zero_speed
     assert (one["lo"], one["hi"]) == (pytest.approx(2.18 - one["error_bar"]), pytest.approx(2.18 + one["error_bar"]))
     assert one["d_segments"] == pytest.approx(0.0175) and one["d_half_speed"] == pytest.approx(0.05)
     assert one["d_quarter_speed"] == pytest.approx(2.14 / 2.10 - 1)
-    assert one["converged_segments"] and not one["converged_speed"]
+    assert one["converged_segments"] and not one["converged_speed"] and one["segments_pair"] == "32/16"
     assert two["status"] == "converged in speed" and two["quasi_static"] == pytest.approx(1.015)
     assert two["error_bar"] == pytest.approx(0.005 + 0.01 + 0.025) and two["converged_speed"]
     assert not two["converged_segments"]
+    assert (two["bracket_lo"], two["bracket_hi"]) == (pytest.approx(1.015 * 0.99), pytest.approx(1.015 * 1.01))
     assert lock["quantity"] == "muL_lock" and lock["quasi_static"] == pytest.approx(2.93)
-    assert lock["error_bar"] == pytest.approx(0.03) and lock["converged_segments"] and lock["converged_speed"]
+    assert lock["error_bar"] == pytest.approx(0.004) and lock["converged_segments"] and lock["converged_speed"]
     assert lx.converged(rows, dict(runs=((16, 0.01), (32, 0.01), (16, 0.005)))) == []  # no quarter speed run
 
 
@@ -345,6 +347,31 @@ def test_next_goes_half_way_to_the_secants_crossing_within_its_bounds():
     assert _next([(1.1, 5.3), (1.1, 5.5)], 1.1, 6.0, 0.03) == pytest.approx(1.1 * 1.027, rel=1e-12)
 
 
+def test_the_crossing_interpolates_the_steady_stages_and_estimates_its_error_by_a_quadratic():
+    """`crossing` on hand-made stages, f_c = 6: on a linear law f = 2 + 4p (crossing at p = 1) the
+    linear crossing is exact and so is the quadratic (error 0); on f = 6p² (crossing at p = 1) from
+    stages at 0.9, 0.95, 1.05 the linear crossing is 0.95 + (6 − 5.415)/(6.615 − 5.415)·0.1 and the
+    quadratic through the three is the law itself, so the error is the linear crossing's distance
+    from 1; transient and locked stages are not read, and the stage order does not matter; a single
+    steady stage below gives half the interval as the error; no steady stage above: None."""
+    def st(p, f, status=SLIDING):
+        return dict(parameter=p, f_in=f, status=status)
+
+    lin = [st(p, 2 + 4 * p) for p in (0.8, 0.9, 1.05)]
+    c, e = crossing(lin, 6.0)
+    assert c == pytest.approx(1.0, rel=1e-12) and e == pytest.approx(0.0, abs=1e-12)
+    quad = [st(1.05, 6 * 1.05 ** 2), st(0.9, 6 * 0.81), st(0.95, 6 * 0.95 ** 2), st(1.0, 3.0, "transient"),
+            st(0.97, math.nan, "locked")]
+    c, e = crossing(quad, 6.0)
+    expect = 0.95 + (6 - 6 * 0.95 ** 2) / (6 * 1.05 ** 2 - 6 * 0.95 ** 2) * 0.1
+    assert c == pytest.approx(expect, rel=1e-12) and e == pytest.approx(abs(expect - 1.0), rel=1e-9)
+    assert e > 1e-3  # the curvature is seen
+    c, e = crossing([st(0.9, 5.0), st(1.1, 7.0)], 6.0)
+    assert (c, e) == (pytest.approx(1.0), pytest.approx(0.1))
+    assert crossing([st(0.9, 5.0), st(1.1, 7.0, "locked")], 6.0) is None
+    assert crossing([st(1.1, 7.0)], 6.0) is None
+
+
 def test_the_stage_rule_on_synthetic_verdicts():
     """`_stage_rule` on hand-made stages, f_c = 6: a steady slide at ≤ f_c is a lower bound and sets the
     next parameter (`_next`); the stage that crosses f_c (or locks) is the upper bound and stops the
@@ -404,8 +431,11 @@ def test_a_staircase_brackets_both_lanes_and_records_every_stage():
     assert list(res["far_loads"]) == [1.5, 1.6] and list(res["vary_mu"]) == [False, True]
     w = float(ROD.rho * ROD.g)
     for lane, lo, hi, load in zip(res["lanes"], (1.5, 0.5), (2.175, 0.725), (1.5, 1.6)):
-        assert sorted(lane) == ["hi", "lo", "profiles", "stages", "status"]
+        assert sorted(lane) == ["crossing", "crossing_error", "hi", "lo", "profiles", "stages", "status"]
         assert lane["status"] == BRACKETED, lane["stages"]
+        (p0, f0), (p1, f1) = [(s["parameter"], s["f_in"]) for s in lane["stages"][-2:]]
+        assert lane["crossing"] == pytest.approx(p0 + (2.2 - f0) * (p1 - p0) / (f1 - f0), rel=1e-12)
+        assert lane["crossing_error"] == pytest.approx(0.5 * (p1 - p0), rel=1e-12)  # one steady stage below
         assert lane["lo"] == pytest.approx(lo, rel=1e-12) and lane["hi"] == pytest.approx(hi, rel=1e-12)
         stages = lane["stages"]
         assert [s["stage"] for s in stages] == list(range(len(stages)))
@@ -607,26 +637,34 @@ def test_a_job_hands_every_setting_to_its_staircase(tmp_path, monkeypatch):
 
 def test_a_point_refined_to_four_times_the_segments_is_judged_on_the_last_refinement():
     """Where n against 2n fails and the point ran at 4n too (`SETTINGS[...]["refine"]`), the segment
-    test is 4n against 2n and the bar's segment term the larger of |m(4n) − m(2n)| and the distance
-    of the speed-converged value from m(2n); without the 4n run, |m(2n) − m(n)| as before."""
+    test is 4n against 2n and the bar's segment term the larger of |c(4n) − c(2n)| and the distance
+    of the speed-converged value from c(2n); without the 4n run, |c(2n) − c(n)| as before. Where it
+    also ran at 2n at half the speed, that pair is tested too, and its change replaces the
+    distance of the value from c(2n) (both pairs measured, the larger change named)."""
     from jaxrod.experiments.lockup_convergence import converged
 
     S = {"runs": ((16, 0.01), (32, 0.01), (16, 0.005), (16, 0.0025))}
 
-    def run(w, v, mid, half=0.05):
+    def run(w, v, c, e=0.002):
         return dict(quantity="F_far_max", muL_over_ell=0.5, kind="run", segments_per_wave=w, push_speed=v,
-                    status="bracketed", lo=mid - half, hi=mid + half)
+                    status="bracketed", lo=c - 0.05, hi=c + 0.05, crossing=c, crossing_error=e)
 
     rows = [run(16, 0.01, 3.50), run(32, 0.01, 3.66), run(16, 0.005, 3.65), run(16, 0.0025, 3.66)]
     (coarse,) = converged(rows, S)
     assert coarse["segments_pair"] == "32/16" and not coarse["converged_segments"] and coarse["converged_speed"]
     assert coarse["quasi_static"] == pytest.approx(3.66)
-    assert coarse["error_bar"] == pytest.approx(0.01 + 0.05 + 0.16)  # speed + v/4's half-width + |m(2n) − m(n)|
+    assert coarse["error_bar"] == pytest.approx(0.01 + 0.002 + 0.16)  # speed + v/4's interpolation + |c(2n) − c(n)|
     (fine,) = converged(rows + [run(64, 0.01, 3.67)], S)
     assert fine["segments_pair"] == "64/32" and fine["converged_segments"]
     assert fine["d_segments"] == pytest.approx(3.67 / 3.66 - 1)
     assert fine["quasi_static"] == pytest.approx(3.66)  # the value stays the speed-converged one at n
-    assert fine["error_bar"] == pytest.approx(0.01 + 0.05 + 0.01)
-    (apart,) = converged([run(16, 0.01, 3.50), run(32, 0.01, 3.80), run(16, 0.005, 3.65), run(16, 0.0025, 3.66),
-                          run(64, 0.01, 3.81)], S)
-    assert apart["converged_segments"] and apart["error_bar"] == pytest.approx(0.01 + 0.05 + 0.14)  # |3.66 − 3.80|
+    assert fine["error_bar"] == pytest.approx(0.01 + 0.002 + 0.01)
+    apart = [run(16, 0.01, 3.50), run(32, 0.01, 3.80), run(16, 0.005, 3.65), run(16, 0.0025, 3.66), run(64, 0.01, 3.81)]
+    (far,) = converged(apart, S)
+    assert far["converged_segments"] and far["error_bar"] == pytest.approx(0.01 + 0.002 + 0.14)  # |3.66 − 3.80|
+    (slow,) = converged(apart + [run(32, 0.005, 3.68)], S)  # 2n at v/2: +0.82 % on n at v/2
+    assert slow["converged_segments"] and slow["segments_pair"] == "32/16 at v/2"
+    assert slow["d_segments"] == pytest.approx(3.68 / 3.65 - 1)
+    assert slow["error_bar"] == pytest.approx(0.01 + 0.002 + 0.03)  # the v/2 pair's change, not |3.66 − 3.80|
+    (off,) = converged(apart + [run(32, 0.005, 3.75)], S)  # +2.7 % at v/2: not converged, named
+    assert not off["converged_segments"] and off["segments_pair"] == "32/16 at v/2"

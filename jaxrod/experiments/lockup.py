@@ -221,6 +221,7 @@ def _write(out, S, results, wall):
     from ..lockup.push import push_rod
 
     from ..lockup.laws import helix_against_laws
+    from ..lockup.staircase import crossing
 
     curve, stages, profiles, laws = [], [], [], []
     for res in results:
@@ -234,12 +235,13 @@ def _write(out, S, results, wall):
                         helix_angle_sliding_deg=angle)
             lo = math.nan if lane["lo"] is None else lane["lo"]
             hi = math.nan if lane["hi"] is None else lane["hi"]
+            cross, cross_err = crossing(lane["stages"], res["f_c"]) or (math.nan, math.nan)
             closed = _closed(rod, 1.0 if lane["vary_mu"] else lane["X"], res["f_c"])
             at, unbounded = ("lock_at_fc", "lock") if lane["vary_mu"] else ("far_at_fc", "far_max")
             curve.append(dict(quantity=LOCK if lane["vary_mu"] else FAR,
                               muL_over_ell=math.nan if lane["vary_mu"] else lane["X"], n_segments=res["n"],
                               push_speed=res["speed"], protocol="staircase", kind="run", lo=lo, hi=hi,
-                              status=lane["status"],
+                              status=lane["status"], crossing=cross, crossing_error=cross_err,
                               **{k: v for k, v in base.items() if k not in ("n_segments", "push_speed", "status")},
                               **{f"soft_{k}_at_fc": v[at] for k, v in closed.items()},
                               **{f"soft_{k}_unbounded": v[unbounded] for k, v in closed.items()}))

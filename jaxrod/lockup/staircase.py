@@ -31,6 +31,13 @@ only: it is never lowered, so no stage unloads a helix). Each stage is read by `
 A stopped lane leaves the batch while the others go on (the batch is compiled again for its new
 size).
 
+**The crossing** (`crossing`): inside a bracket, the parameter where the steady entry force
+reaches f_c, read linearly between the last steady stage at or below f_c and the first above it,
+with an interpolation error: its distance from the quadratic through those two and the steady
+stage before them. It resolves the quantity finer than the bracket, whose width is set by the
+least step (0.9 × `rel`): two runs whose brackets differ by one stage can cross f_c at nearly
+the same parameter.
+
 Layer: beside `jaxrod.lockup.push`, whose scene it runs.
 """
 
@@ -46,7 +53,7 @@ from ..integrators.base import RunOptions
 from .push import _check, _run_lanes, _start, buckle_wavelength, extents, lane_models, units
 from .verdict import LOCKED, SLIDING, TRANSIENT, Criterion, verdict
 
-__all__ = ["staircase", "BRACKETED", "WIDE", "BELOW_START"]
+__all__ = ["staircase", "crossing", "BRACKETED", "WIDE", "BELOW_START"]
 
 BRACKETED, WIDE, BELOW_START = "bracketed", "wide", "below start"
 
@@ -69,6 +76,30 @@ def _next(history, p, f_c, rel, growth=0.12):
         return max(floor, p1 * (1 + growth))
     target = p1 + (math.log(f_c) - math.log(f1)) / slope
     return max(floor, p1 + min(0.5 * (target - p1), growth * p1))
+
+
+def crossing(stages, f_c: float) -> tuple[float, float] | None:
+    """Where the steady entry force of a lane's `stages` (dicts with `parameter`, `status`,
+    `f_in` [F₀], as `staircase` returns them) crosses `f_c` [F₀] (module docstring): (the
+    linear crossing between the last sliding stage at or below f_c and the first above it, its
+    interpolation error). The error is the distance to the crossing of the quadratic through
+    those two and the sliding stage before them, or, without one (or where that quadratic does
+    not cross f_c between the two), half the distance between the two stages. None without a
+    sliding stage on each side of f_c."""
+    pts = sorted((float(s["parameter"]), float(s["f_in"])) for s in stages if s["status"] == SLIDING)
+    below, above = [p for p in pts if p[1] <= f_c], [p for p in pts if p[1] > f_c]
+    if not below or not above:
+        return None
+    (x0, f0), (x1, f1) = below[-1], above[0]
+    linear = x0 + (f_c - f0) * (x1 - x0) / (f1 - f0)
+    error = 0.5 * (x1 - x0)
+    if len(below) >= 2 and below[-2][0] < x0:
+        xs, fs = np.array([below[-2][0], x0, x1]), np.array([below[-2][1], f0, f1])
+        roots = np.roots(np.polyfit(xs - x0, fs - f_c, 2)) + x0
+        inside = [float(z.real) for z in roots if abs(z.imag) < 1e-12 and x0 <= z.real <= x1]
+        if inside:
+            error = min(abs(z - linear) for z in inside)
+    return linear, error
 
 
 def _stage_rule(lane: dict, p: float, status: str, f_bar: float, f_c: float, rel: float, repeats: int):
@@ -108,7 +139,8 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     **Returns:** a dict: `lanes`, a list of one dict per lane — `status` (`BRACKETED`, `WIDE`,
     `BELOW_START`, or the verdict status that stopped it: transient, unresolved, failed; or
     `"open"` if the stages ran out), `lo`, `hi` (the bracket of the varied parameter: far load
-    [F₀] or μL/ℓ; None where not found), `stages` (per stage: the parameter, the verdict, the
+    [F₀] or μL/ℓ; None where not found), `crossing`, `crossing_error` (`crossing`; None where
+    not found), `stages` (per stage: the parameter, the verdict, the
     entry force over the last part [F₀], the worst segments per turn and helix angle [deg], the
     helical and sinusoidal extents at the last save [m], `push.extents`), `profiles` (per
     sliding stage at or below f_c, its last save: `theta` [rad], `wall_force` [N/m] at the nodes,
@@ -183,6 +215,7 @@ def staircase(rod, mus, far_loads, speed: float, *, f_c: float = 6.0, vary_mu=Fa
     for lane in lanes:
         lane.pop("repeats")
         lane.pop("steady")
+        lane["crossing"], lane["crossing_error"] = crossing(lane["stages"], f_c) or (None, None)
     return dict(lanes=lanes, F0=F0, ell=ell, n=n, dt=dt, l0=l0, r=r, L_over_ell=L / ell, f_c=f_c, speed=speed,
                 mus=mus, far_loads=far_loads, vary_mu=vary_mu, scheme=scheme,
                 X=mus * L / ell)
