@@ -12,6 +12,7 @@ from . import theory
 from .output import subplots, write_csv
 from .params import RodChannel
 from .registry import make_perturbation, recipe
+from .map_columns import search_columns
 from .sweeps import SweepResult, SweepSpec, sweep
 
 __all__ = ["stability_map", "grid_boundary", "fit_power_law", "plot_maps"]
@@ -76,6 +77,7 @@ def stability_map(
     t1: float | None = None,
     curve_rtol: float | None = 1e-3,
     chunk_size: int | None = None,
+    fill: str | None = None,
 ) -> dict:
     """Classify the reference rod straight/buckled over the grid `dF` × `v0` for every μ in
     `mus` (sine mode-`mode` velocity perturbation), fit the boundary, and write `map.png`,
@@ -90,6 +92,11 @@ def stability_map(
     them return the same summary, and process 0 alone writes the files and shows progress (the
     searched boundary is not split: every process searches it alike).
 
+    `fill`: `"grid"` runs every cell; `"search"` finds each column's boundary by bisection over
+    the grid's amplitudes and labels the cells it did not run from it ([`jaxrod.map_columns`][]:
+    right where every column is monotone; map.csv's `ran` says which cells ran); default: the
+    model's (`map_fill`: the 3D rod searches, the others fill the grid).
+
     **Returns:** the summary (per μ: boundary points, fitted exponent ± standard error, the
     largest stable ΔF/F⁰_cr seen, counts), also written to `map.json`.
     """
@@ -99,13 +106,16 @@ def stability_map(
     progress = progress and main
     if t1 is None:  # the horizon a boundary search of this model runs to (2 s; the 3D rod 0.4 s)
         t1 = recipe(model).search_horizon
+    fill = recipe(model).map_fill if fill is None else fill
+    if fill not in ("grid", "search"):
+        raise ValueError(f"fill = {fill!r} is invalid: expected 'grid' or 'search'.")
     dF = np.asarray(dF, float)
     v0 = np.asarray(v0, float)
     results = {}
     summary = {"model": model, "mode": mode, "t1": t1, "dF": dF.tolist(), "v0": v0.tolist(), "maps": {}}
     for mu in mus:
         path = None if out is None else os.path.join(out, f"sweep_mu{mu:g}")
-        res = _map_sweep(float(mu), dF, v0, model, n, mode, t1, path, progress, chunk_size)
+        res = _map_sweep(float(mu), dF, v0, model, n, mode, t1, path, progress, chunk_size, fill)
         results[mu] = res
         summary["maps"][f"{mu:g}"] = _summarise(res, dF, v0, float(mu))
         if curve_rtol is not None and mu > 0 and recipe(model).search_method == "departure":
@@ -113,6 +123,9 @@ def stability_map(
     summary["n"] = results[mus[0]].meta["n"]
     summary["dt"] = results[mus[0]].meta["dt"]
     summary["schemes"] = results[mus[0]].meta["schemes"]
+    if fill == "search":
+        summary["fill"] = {"method": "search", "runs": {f"{mu:g}": int(r.outputs["ran"].sum()) for mu, r in results.items()},
+                           "cells": {f"{mu:g}": len(r) for mu, r in results.items()}}
     if out is not None and main:
         os.makedirs(out, exist_ok=True)
         write_csv(os.path.join(out, "map.csv"), _map_rows(results))
@@ -122,7 +135,7 @@ def stability_map(
     return summary
 
 
-def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size) -> SweepResult:
+def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size, fill="grid") -> SweepResult:
     """The map's sweep at one μ: one sweep per run of columns that the model runs with one scheme
     (`scheme_under` the sine perturbation at the column's load: the 3D rod's columns past the
     wall's wrinkling load run the explicit leapfrog, the others its implicit step), at one size
@@ -141,7 +154,10 @@ def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size) -> Sw
     for a, b in zip(starts, starts[1:] + [len(dF)]):
         spec = SweepSpec(model=model, perturbation="sine", mu=mu, mode=mode, n=n, t1=t1)
         where = path if (a == 0 or path is None) else f"{path}_dF{dF[a]:g}"
-        part = sweep(spec, {"dF": dF[a:b], "amplitude": v0}, path=where, progress=progress, chunk_size=chunk_size)
+        if fill == "search":
+            part = search_columns(spec, dF[a:b], v0, path=where, progress=progress, chunk_size=chunk_size)
+        else:
+            part = sweep(spec, {"dF": dF[a:b], "amplitude": v0}, path=where, progress=progress, chunk_size=chunk_size)
         parts.append(part)
         groups.append({"dF_first": float(dF[a]), "dF_last": float(dF[b - 1]), "scheme": part.meta["scheme"],
                        "dt": part.meta["dt"]})
@@ -214,7 +230,7 @@ def _map_rows(results: dict) -> list[dict]:
             rows.append(dict(mu=mu, dF=i["dF"][k], v0=i["amplitude"][k], buckled=o["buckled"][k],
                              t_buckle=o["t_buckle"][k], dominant_mode=o["dominant_mode"][k],
                              max_theta=o["max_theta"][k], stuck=o["stuck"][k], t_stop=o["t_stop"][k],
-                             result=o["result"][k]))
+                             result=o["result"][k], **({"ran": o["ran"][k]} if "ran" in o else {})))
     return rows
 
 

@@ -16,7 +16,7 @@ LAYERS = [
     ["integrators"],
     ["perturbations", "simulate", "problem", "registry"],
     ["scene", "lockup.push", "lockup.staircase"],
-    ["sweeps", "boundary", "model_choice"],
+    ["sweeps", "boundary", "model_choice", "map_columns"],
     ["stability_map", "worst_case", "figures"],
     ["experiments", "reproduce"],
     ["cli", "__init__", "__main__"],

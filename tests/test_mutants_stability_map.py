@@ -332,9 +332,11 @@ def test_buckles_for_every_positive_load_looks_at_every_positive_load():
 
 def test_a_map_runs_to_its_models_search_horizon_unless_given_one(monkeypatch):
     """`stability_map` without `t1` sweeps each model to its `search_horizon` (the field model 2 s,
-    the 3D rod 0.4 s), and a given `t1` as given."""
+    the 3D rod 0.4 s), and a given `t1` as given; the field model fills its grid, the 3D rod
+    searches its columns (`map_fill`)."""
     import pytest
 
+    from jaxrod import map_columns as mc
     from jaxrod import stability_map as sm
 
     seen = []
@@ -342,15 +344,21 @@ def test_a_map_runs_to_its_models_search_horizon_unless_given_one(monkeypatch):
     class Stop(Exception):
         pass
 
-    def fake_sweep(spec, grid, **kw):
-        seen.append((spec.model, spec.t1))
-        raise Stop
+    def fake(fill):
+        def fake_sweep(spec, grid, **kw):
+            seen.append((spec.model, spec.t1, fill, kw.get("combine", "grid")))
+            raise Stop
+        return fake_sweep
 
-    monkeypatch.setattr(sm, "sweep", fake_sweep)
+    monkeypatch.setattr(sm, "sweep", fake("grid"))
+    monkeypatch.setattr(mc, "sweep", fake("search"))
     for model, t1 in (("field", None), ("rod3d", None), ("rod3d", 1.0)):
         with pytest.raises(Stop):
             sm.stability_map((0.3,), model=model, out=None, progress=False, t1=t1)
-    assert seen == [("field", 2.0), ("rod3d", 0.4), ("rod3d", 1.0)]
+    with pytest.raises(Stop):
+        sm.stability_map((0.3,), model="rod3d", out=None, progress=False, fill="grid")
+    assert seen == [("field", 2.0, "grid", "grid"), ("rod3d", 0.4, "search", "zip"), ("rod3d", 1.0, "search", "zip"),
+                    ("rod3d", 0.4, "grid", "grid")]
 
 
 def test_rod3d_map_runs_the_columns_past_the_wrinkling_load_with_the_explicit_scheme(monkeypatch, tmp_path):

@@ -27,13 +27,16 @@ def _cmd_map(args) -> int:
     try:
         s = stability_map(mus, args.dF, args.v0, args.model, args.n, 6, args.out,
                           progress=not args.quiet, t1=args.t1, curve_rtol=None if args.no_curve else 1e-3,
-                          chunk_size=args.chunk_size)
+                          chunk_size=args.chunk_size, fill=args.fill)
     except ValueError as err:
         _fail(str(err))
     if not main:
         return 0
     steps = ", ".join(f"{g['scheme']} at {g['dt']:.3e} s for dF {g['dF_first']:g}-{g['dF_last']:g} N" for g in s["schemes"])
     print(f"n = {s['n']}, {steps}; wrote {args.out}/map.png, map.csv, map.json")
+    if "fill" in s:
+        print("  column search: " + ", ".join(f"mu = {k}: {s['fill']['runs'][k]} of {s['fill']['cells'][k]} cells run"
+                                              for k in s["fill"]["runs"]))
     for key, m in s["maps"].items():
         line = f"  mu = {key}: {m['buckled']} buckled, {m['stable']} stable"
         if m["failed"]:
@@ -71,5 +74,9 @@ def register(sub) -> None:
     mp.add_argument("--quiet", action="store_true", help="no progress bar")
     mp.add_argument("--no-curve", dest="no_curve", action="store_true",
                     help="do not search the boundary at every load (drawn over the grid, rtol 1e-3)")
+    mp.add_argument("--fill", choices=["grid", "search"], default=None,
+                    help="grid: run every cell; search: bisect each column for its boundary and label the rest "
+                         "(right where columns are monotone; map.csv's ran column says which cells ran). "
+                         "Default: the model's (rod3d search, the others grid)")
     _add_distributed_options(mp)
     mp.set_defaults(func=_cmd_map, check=_check_map, all_cores=True)

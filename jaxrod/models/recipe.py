@@ -44,6 +44,9 @@ class AbstractRecipe(eqx.Module):
     search_horizon: ClassVar[float] = 2.0
     # lanes of a sweep's continuous batch (`jaxrod.sweep`; `None`: the batching default)
     sweep_lanes: ClassVar[int | None] = None
+    # how `jaxrod.stability_map` fills its grid: `"grid"` runs every cell, `"search"` finds each
+    # column's boundary by bisection and labels the rest (`jaxrod.map_columns`)
+    map_fill: ClassVar[str] = "grid"
 
     @abc.abstractmethod
     def build(self, rod, F, size: int | None, mode: int):

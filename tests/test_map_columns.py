@@ -1,0 +1,107 @@
+"""A stability map's columns searched by bisection (`jaxrod.map_columns`): the bisection's rules on
+a stand-in sweep, and a small single-mode map searched against the same map filled."""
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+import jaxrod as jr
+from jaxrod import map_columns as mc
+from jaxrod import stability_map as sm
+
+
+def _stand_in(boundary, fail=()):
+    """A sweep whose member at (dF, v0) buckles iff v0 >= boundary[dF], fails at the (dF, v0) in
+    `fail`; it records the members of each call."""
+    calls = []
+
+    def fake(spec, inputs, combine, path, progress, chunk_size):
+        assert combine == "zip"
+        dF, v0 = np.asarray(inputs["dF"]), np.asarray(inputs["amplitude"])
+        calls.append((spec, list(zip(dF.tolist(), v0.tolist())), path))
+        b = np.array([v >= boundary[d] for d, v in zip(dF, v0)])
+        res = np.array([1 if (d, v) in fail else 0 for d, v in zip(dF, v0)])
+        t = np.where(b, 0.1, math.inf)
+        out = dict(buckled=b, t_buckle=t, dominant_mode=np.full(len(b), 6), max_theta=np.where(b, 0.3, 0.01),
+                   final_theta=np.where(b, 0.3, 0.0), stuck=~b, t_stop=np.where(b, 0.1, 0.4), result=res)
+        return jr.SweepResult({"dF": dF, "amplitude": v0, "index": np.arange(len(b))}, out, (len(b),),
+                              ("dF", "amplitude"), {"n": 12, "dt": 1e-4 * (1 + len(calls)), "shape": [len(b)]})
+
+    return fake, calls
+
+
+def test_each_column_is_bisected_and_the_rest_labelled_from_its_boundary(monkeypatch):
+    """Three columns of 8 amplitudes (1..8) with boundaries at 3.5 (the first buckled cell 4: index
+    3), 0 (all buckle) and 100 (none does): bisection between −1 and 8 (amplitudes 4, 2, 3 for the
+    first; 4, 2, 1 for the second; 4, 6, 7, 8 for the third) labels every cell as the full grid
+    would, in 4 rounds of at most 3 runs (10 runs for 24 cells); every later round runs at the
+    first round's size and step; the cells that ran keep their runs' numbers, the others NaN times,
+    mode −1, not stuck, result 0."""
+    fake, calls = _stand_in({1.0: 3.5, 2.0: 0.0, 3.0: 100.0})
+    monkeypatch.setattr(mc, "sweep", fake)
+    v0 = np.arange(1.0, 9.0)
+    res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0, 3.0], v0, path="p", progress=False)
+    assert res.shape == (3, 8) and res.names == ("dF", "amplitude")
+    assert res.grid("buckled").tolist() == [[v >= 3.5 for v in v0], [True] * 8, [False] * 8]
+    assert [m for _, m, _ in calls] == [[(1.0, 4.0), (2.0, 4.0), (3.0, 4.0)], [(1.0, 2.0), (2.0, 2.0), (3.0, 6.0)],
+                                        [(1.0, 3.0), (2.0, 1.0), (3.0, 7.0)], [(3.0, 8.0)]]
+    assert [p for _, _, p in calls] == ["p_round0", "p_round1", "p_round2", "p_round3"]
+    assert calls[0][0].dt is None and all((s.n, s.dt) == (12, 2e-4) for s, _, _ in calls[1:])
+    ran = res.grid("ran")
+    assert ran.sum() == 10 and res.meta["runs"] == 10 and res.meta["rounds"] == 4 and res.meta["fill"] == "search"
+    assert ran[0].tolist() == [False, True, True, True, False, False, False, False]
+    assert np.all(np.isnan(res.grid("t_buckle")[~ran])) and np.all(res.grid("dominant_mode")[~ran] == -1)
+    assert not res.grid("stuck")[~ran].any() and np.all(res.grid("result") == 0)
+    assert res.grid("t_stop")[0, 2] == 0.4 and res.grid("t_stop")[0, 3] == 0.1  # the runs' own numbers
+    assert res.inputs["amplitude"].tolist() == list(v0) * 3 and res.inputs["index"].tolist() == list(range(24))
+
+
+def test_a_column_with_a_failed_run_is_run_whole_and_bad_amplitudes_are_refused(monkeypatch):
+    fake, calls = _stand_in({1.0: 3.5, 2.0: 3.5}, fail={(2.0, 3.0)})
+    monkeypatch.setattr(mc, "sweep", fake)
+    res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0], np.arange(1.0, 9.0), progress=False)
+    assert res.grid("ran")[1].all() and res.grid("result")[1].tolist() == [0, 0, 1, 0, 0, 0, 0, 0]
+    assert res.grid("ran")[0].sum() == 3 and calls[-1][1] == [(2.0, v) for v in (1.0, 5.0, 6.0, 7.0, 8.0)]
+    assert res.grid("buckled")[1].tolist() == [False, False, False, True, True, True, True, True]
+    with pytest.raises(ValueError, match=r"v0 = \[2.0, 1.0\] is invalid"):
+        mc.search_columns(jr.SweepSpec(model="mode"), [1.0], [2.0, 1.0], progress=False)
+
+
+def test_a_searched_single_mode_map_labels_every_cell_as_the_filled_map(tmp_path):
+    """The single mode's map at μ = 0.3 over 3 loads × 9 amplitudes, searched and filled: the same
+    labels in every cell and the same fitted boundary, from 10 runs instead of 27; map.csv says
+    which cells ran; map.json the fill and its runs."""
+    dF, v0 = [1.0, 4.0, 16.0], np.geomspace(2e-3, 0.2, 9).tolist()
+    full = sm.stability_map(mus=(0.3,), dF=dF, v0=v0, model="mode", out=str(tmp_path / "grid"), progress=False,
+                            t1=0.5, fill="grid")
+    found = sm.stability_map(mus=(0.3,), dF=dF, v0=v0, model="mode", out=str(tmp_path / "search"), progress=False,
+                             t1=0.5, fill="search")
+    a, b = full["maps"]["0.3"], found["maps"]["0.3"]
+    assert 0 < a["stable"] < 27 and (a["buckled"], a["stable"]) == (b["buckled"], b["stable"])
+    assert a["boundary_v0"] == b["boundary_v0"] and a["exponent"] == b["exponent"]
+    assert "fill" not in full and found["fill"] == {"method": "search", "runs": {"0.3": 10}, "cells": {"0.3": 27}}
+    rows = {tmp: list(csv.DictReader(line for line in open(tmp_path / tmp / "map.csv") if not line.startswith("#")))
+            for tmp in ("grid", "search")}
+    assert [r["buckled"] for r in rows["grid"]] == [r["buckled"] for r in rows["search"]]
+    assert "ran" not in rows["grid"][0] and sum(r["ran"] == "1" for r in rows["search"]) == 10
+    with pytest.raises(ValueError, match="fill = 'cells' is invalid"):
+        sm.stability_map(mus=(0.3,), dF=dF, v0=v0, model="mode", out=None, progress=False, fill="cells")
+
+
+def test_the_map_command_searches_columns_on_request(tmp_path, capsys):
+    """`jaxrod map --fill search` on the single mode: the line saying how many cells ran, and
+    map.csv's `ran` column; `--fill` outside grid/search is refused by argparse, one line."""
+    from jaxrod.cli import main
+
+    out = tmp_path / "m"
+    assert main(["map", "--model", "mode", "--mu", "0.3", "--dF", "1,16", "--v0", "0.002:0.2:5", "--t1", "0.5",
+                 "--fill", "search", "--out", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    rows = list(csv.DictReader(line for line in open(out / "map.csv") if not line.startswith("#")))
+    ran = sum(r["ran"] == "1" for r in rows)
+    assert f"column search: mu = 0.3: {ran} of 10 cells run" in text and 0 < ran < 10
+    with pytest.raises(SystemExit):
+        main(["map", "--fill", "cells"])
+    assert "argument --fill: invalid choice: 'cells'" in capsys.readouterr().err
