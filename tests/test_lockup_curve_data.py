@@ -83,7 +83,7 @@ def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_
         return out
 
     rows = _rows("curve.csv")
-    runs = [typed(r) for r in rows if r["kind"] == "run" and r["protocol"] == "staircase"]
+    runs = [typed(r) for r in rows if r["kind"] == "run" and r["protocol"] != "single_step"]
     committed = [r for r in rows if r["kind"] == "converged"]
     again = lx.converged(runs, lx.SETTINGS[False])
     assert [(r["quantity"], r["muL_over_ell"]) for r in committed] == [
@@ -92,7 +92,7 @@ def test_the_converged_rows_are_the_rule_applied_to_the_run_rows_and_the_readme_
     for row, mine in zip(committed, again):
         assert row["segments_pair"] == mine["segments_pair"]
         for k in ("quasi_static", "error_bar", "d_segments", "d_half_speed", "d_quarter_speed", "lo", "hi",
-                  "bracket_lo", "bracket_hi"):
+                  "bracket_lo", "bracket_hi", "d_path_lo", "d_path_hi", "path_protocols"):
             assert float(row[k]) == pytest.approx(mine[k], rel=1e-12), (row["muL_over_ell"], k)
         assert (row["converged_segments"], row["converged_speed"]) == (
             str(int(mine["converged_segments"])), str(int(mine["converged_speed"])))

@@ -668,3 +668,38 @@ def test_a_point_refined_to_four_times_the_segments_is_judged_on_the_last_refine
     assert slow["error_bar"] == pytest.approx(0.01 + 0.002 + 0.03)  # the v/2 pair's change, not |3.66 − 3.80|
     (off,) = converged(apart + [run(32, 0.005, 3.75)], S)  # +2.7 % at v/2: not converged, named
     assert not off["converged_segments"] and off["segments_pair"] == "32/16 at v/2"
+
+
+def test_the_path_band_is_the_other_protocols_crossings_against_the_base_run(tmp_path):
+    """`protocol_rows` reads `stage_protocols.json`'s runs of every point (not the single-lane runs
+    that came first), each lane's crossing from its steady stages; `converged` puts the other
+    protocols' crossings at the base (n, v) against the base run's as the path band (0 included),
+    and a protocol row never stands in for the base run."""
+    from jaxrod.experiments.lockup_convergence import converged
+    from jaxrod.experiments.lockup_path import PROTOCOLS, protocol_rows
+
+    lane = dict(point=1.0, start=1.0, status="bracketed", lo=2.0, hi=2.05, stages=5,
+                steady=[(1.9, 5.0), (2.0, 5.8), (2.05, 6.2)])
+    lock = dict(point="lock", start=1.0, status="open", lo=3.0, hi=None, stages=24, steady=[(3.0, 5.5)])
+    runs = {"settle": dict(protocol="settle", muL_over_ell=1.0, steady=[]),
+            "settle@L2": dict(protocol="settle", L_over_ell=2.0, n=37, speed=0.01, lanes=[lane, lock])}
+    (tmp_path / "stage_protocols.json").write_text(json.dumps(runs))
+    far, lk = protocol_rows(str(tmp_path), 6.0, 16)
+    assert (far["protocol"], far["muL_over_ell"], far["n_segments"], far["segments_per_wave"]) == (
+        PROTOCOLS["settle"], 1.0, 37, 16)
+    assert far["crossing"] == pytest.approx(2.025) and far["source"] == "stage_protocols.json:settle@L2"
+    assert lk["quantity"] == "muL_lock" and math.isnan(lk["crossing"]) and math.isnan(lk["hi"])
+    assert protocol_rows(str(tmp_path / "none"), 6.0, 16) == []
+
+    S = dict(runs=((16, 0.01), (32, 0.01), (16, 0.005), (16, 0.0025)))
+    rows = [_run_row(1.0, 16, 0.01, 2.00), _run_row(1.0, 32, 0.01, 2.01), _run_row(1.0, 16, 0.005, 2.02),
+            _run_row(1.0, 16, 0.0025, 2.02)]
+    (alone,) = converged(rows, S)
+    assert (alone["d_path_lo"], alone["d_path_hi"], alone["path_protocols"]) == (0.0, 0.0, 0)
+    other = [dict(_run_row(1.0, 16, 0.01, 2.06), protocol="staircase_settle_0.3m"),
+             dict(_run_row(1.0, 16, 0.01, 1.98), protocol="staircase_start_half"),
+             dict(_run_row(1.0, 16, 0.005, 1.50), protocol="staircase_start_half")]  # not at the base speed
+    (band,) = converged(other + rows, S)  # listed first: still not taken for the base run
+    assert band["quasi_static"] == alone["quasi_static"] and band["d_half_speed"] == pytest.approx(0.01)
+    assert (band["d_path_lo"], band["d_path_hi"], band["path_protocols"]) == (
+        pytest.approx(-0.01), pytest.approx(0.03), 2)

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..output import write_csv
 from .lockup_convergence import FAR, LOCK, converged
-from .lockup_path import single_step_rows
+from .lockup_path import protocol_rows, single_step_rows
 
 __all__ = ["lockup", "converged", "SETTINGS", "VARIANTS"]
 
@@ -271,8 +271,9 @@ def _write(out, S, results, wall):
                                          wall_force=N, axial_force=F, mu=p["mu"], EI=res["EI"], w=res["w"], r=res["r"]))
     onsets = _onsets(results)
     job_walls = {(r["L_over_ell"], r["per_wave"], r["speed"], r["wall_s"]): r["wall_s"] for r in results}  # per job
-    curve += converged(curve, S)
-    curve += single_step_rows(out, S["f_c"], stages) if S.get("converge") else []  # the full setting's points
+    others = protocol_rows(out, S["f_c"], S["runs"][0][0]) if S.get("converge") else []  # the full setting's points
+    curve += converged(curve + others, S) + others
+    curve += single_step_rows(out, S["f_c"], stages) if S.get("converge") else []
     cols = list(dict.fromkeys(k for r in curve for k in r))  # the converged rows' columns, empty in the runs'
     curve = [{k: r.get(k, math.nan) for k in cols} for r in curve]
     write_csv(os.path.join(out, "onsets.csv"), onsets)

@@ -35,7 +35,11 @@ def converged(rows, S) -> list:
       `bracket_lo`, `bracket_hi` the bracket of the run the value is read from (v/4 at n);
     - `d_segments` (the pair named in `segments_pair` with the largest change), `d_half_speed`
       (v/2 against v), `d_quarter_speed` (v/4 against v/2): relative differences of crossings;
-      `converged_segments`, `converged_speed`: within `SEGMENTS_TOL`, `SPEED_TOL`.
+      `converged_segments`, `converged_speed`: within `SEGMENTS_TOL`, `SPEED_TOL`;
+    - the path band, where `rows` hold runs of other staircase protocols at the base (n, v)
+      (`protocol` other than "staircase" and "single_step", with a crossing): `d_path_lo`,
+      `d_path_hi`, the smallest and largest of their crossings against the base run's (0 included),
+      and `path_protocols`, how many there were.
 
     A point without a crossing in each of the four runs at n, 2n, v/2, v/4 gets none."""
     w0, v0 = S["runs"][0]
@@ -46,11 +50,15 @@ def converged(rows, S) -> list:
     out = []
     points = sorted({(r["quantity"], r["muL_over_ell"]) for r in rows if r["kind"] == "run"},
                     key=lambda k: (k[0], 0.0 if math.isnan(k[1]) else k[1]))
+
+    def same_point(r, quantity, X):
+        return r["kind"] == "run" and r["quantity"] == quantity and (
+            r["muL_over_ell"] == X or (math.isnan(X) and math.isnan(r["muL_over_ell"])))
+
     for quantity, X in points:
         runs = {}
         for name, (w, v) in want.items():
-            hit = [r for r in rows if r["kind"] == "run" and r["quantity"] == quantity
-                   and (r["muL_over_ell"] == X or (math.isnan(X) and math.isnan(r["muL_over_ell"])))
+            hit = [r for r in rows if same_point(r, quantity, X) and r.get("protocol", "staircase") == "staircase"
                    and r["segments_per_wave"] == w and math.isclose(r["push_speed"], v)
                    and not math.isnan(r.get("crossing", math.nan))]
             if hit:
@@ -77,10 +85,15 @@ def converged(rows, S) -> list:
         _, d_seg, pair, _ = max(changes)
         bar = speed_err + interp + seg_err
         q = runs["quarter"]
+        others = [r["crossing"] / c["base"] - 1 for r in rows if same_point(r, quantity, X)
+                  and r.get("protocol", "staircase") not in ("staircase", "single_step")
+                  and r["segments_per_wave"] == w0 and math.isclose(r["push_speed"], v0)
+                  and not math.isnan(r.get("crossing", math.nan))]
         out.append(dict(runs["base"], kind="converged", push_speed=0.0, lo=value - bar, hi=value + bar,
                         status="converged in speed" if speed_ok else "extrapolated to v = 0", stages=math.nan,
                         crossing=math.nan, crossing_error=math.nan, bracket_lo=q["lo"], bracket_hi=q["hi"],
                         quasi_static=value, error_bar=bar, d_segments=d_seg, segments_pair=pair, d_half_speed=d_half,
                         d_quarter_speed=d_quarter, converged_segments=all(ch[0] <= SEGMENTS_TOL for ch in changes),
-                        converged_speed=speed_ok))
+                        converged_speed=speed_ok, d_path_lo=min([0.0, *others]), d_path_hi=max([0.0, *others]),
+                        path_protocols=len(others)))
     return out

@@ -1,6 +1,8 @@
 """The lock-up curve's path dependence (`jaxrod.experiments.lockup`): the staircase's steady
 stage at a point's lower bound reached instead in one step from the straight rod, read by the same
-verdict, as `curve.csv` rows of `protocol = single_step`.
+verdict, as `curve.csv` rows of `protocol = single_step`; and the staircases of other stage
+protocols (`studies/lockup/stage_protocols.py`: a longer settle per stage, a lower start), as rows
+of their protocol with their brackets and crossings (`protocol_rows`).
 
 Each such run is a `jaxrod lockup` command (`results/lockup/path/single_step_muL{X}_far{F}/`,
 the command and its commit in `lockup.log`): the rod of the point pushed from straight against the
@@ -20,11 +22,13 @@ import os
 
 from .lockup_convergence import FAR, LOCK
 
-__all__ = ["PROTOCOL", "single_step_rows"]
+__all__ = ["PROTOCOL", "PROTOCOLS", "protocol_rows", "single_step_rows"]
 
 PROTOCOL = "single_step"
 BASE_SPEED = 0.01
 """The push speed of the base staircases and of the single-step runs [m/s]."""
+PROTOCOLS = {"settle": "staircase_settle_0.3m", "start": "staircase_start_half"}
+"""The other staircases' `protocol` in `curve.csv`, by their key in `stage_protocols.json`."""
 
 
 def _staircase_force(stages, varies, X, n, parameter):
@@ -59,4 +63,32 @@ def single_step_rows(out, f_c: float, stages: list) -> list:
                          parameter=parameter, push=d["push"], entry_force=force[1],
                          staircase_entry_force=stair, single_step_over_staircase=force[1] / stair,
                          helical_over_ell_end=d["helical_over_ell_end"], source=os.path.relpath(path, out)))
+    return rows
+
+
+def protocol_rows(out, f_c: float, per_wave: int) -> list:
+    """The rows of the other stage protocols' staircases in `out/stage_protocols.json` (its
+    `<protocol>@L<L/ℓ>` runs, every point of a rod length as a lane; `per_wave` segments per buckle
+    wave, the base's), each lane's crossing of `f_c` read from its steady stages."""
+    from ..lockup.staircase import crossing
+
+    path = os.path.join(out, "stage_protocols.json")
+    if not os.path.exists(path):
+        return []
+    with open(path) as fh:
+        runs = json.load(fh)
+    rows = []
+    for key, run in sorted(runs.items()):
+        if "@L" not in key:  # the single-lane runs at μL/ℓ = 1 that came first: the same as a lane of settle@L2
+            continue
+        for lane in run["lanes"]:
+            lock = lane["point"] == "lock"
+            got = crossing([dict(parameter=p, f_in=f, status="sliding") for p, f in lane["steady"]], f_c)
+            rows.append(dict(quantity=LOCK if lock else FAR, muL_over_ell=math.nan if lock else float(lane["point"]),
+                             n_segments=run["n"], push_speed=run["speed"], protocol=PROTOCOLS[run["protocol"]],
+                             kind="run", lo=math.nan if lane["lo"] is None else lane["lo"],
+                             hi=math.nan if lane["hi"] is None else lane["hi"], status=lane["status"],
+                             crossing=got[0] if got else math.nan, crossing_error=got[1] if got else math.nan,
+                             entry_force_bound=f_c, segments_per_wave=per_wave, L_over_ell=run["L_over_ell"],
+                             stages=lane["stages"], source=f"stage_protocols.json:{key}"))
     return rows
