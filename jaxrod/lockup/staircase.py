@@ -35,7 +35,7 @@ size).
 reaches f_c, read linearly between the last steady stage at or below f_c and the first above it,
 with an interpolation error: its distance from the quadratic through those two and the steady
 stage before them. It resolves the quantity finer than the bracket, whose width is set by the
-least step (0.9 × `rel`): two runs whose brackets differ by one stage can cross f_c at nearly
+least step (`_next`): two runs whose brackets differ by one stage can cross f_c at nearly
 the same parameter.
 
 Layer: beside `jaxrod.lockup.push`, whose scene it runs.
