@@ -6,7 +6,7 @@ side by side in one process on one device.
     XLA_FLAGS=--xla_force_host_platform_device_count=1 python benchmarks/rod3d_sweep_step.py [--t1 0.01]
 
 Writes `rod3d_sweep_step.json` (commit, date, machine, µs a step by each path) under
-benchmarks/results/.
+benchmarks/results/ (or `--out`).
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--t1", type=float, default=0.01)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results", "rod3d_sweep_step.json"))
     a = ap.parse_args()
     dF, v0, n = 64.0, 3.164e-3, 500
     spec = SweepSpec(model="rod3d", perturbation="sine", mu=0.3, mode=6, n=n, t1=a.t1)
@@ -59,7 +60,7 @@ def main():
     record = dict(commit=commit, date=datetime.date.today().isoformat(), machine=f"{platform.machine()}, {os.cpu_count()} cores",
                   devices=jax.local_device_count(), scheme=res.meta["scheme"], dt=dt, steps=steps, t1=a.t1,
                   us_per_step={k: 1e6 * min(v) / steps for k, v in walls.items()}, walls_s=walls)
-    with open(os.path.join(ROOT, "benchmarks", "results", "rod3d_sweep_step.json"), "w") as fh:
+    with open(a.out, "w") as fh:
         json.dump(record, fh, indent=1)
     print(json.dumps(record, indent=1))
 

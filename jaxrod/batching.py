@@ -66,9 +66,11 @@ def run_pool(
     **Returns:** `(runs, stats)`: every run at its end, and a [`PoolStats`][].
     """
     n_runs = valid.shape[0]
-    # at least two lanes: XLA compiles a batch of one like an unbatched loop but rounds some
-    # fused operations differently in the last bit (measured); two keep every run bit-identical
-    B = max(2, min(lanes, n_runs))
+    # at least two lanes unless one is asked for: XLA compiles a batch of one like an unbatched
+    # loop, which rounds some fused operations differently in the last bit (measured), so two keep
+    # every run bit-identical across lane counts; `lanes=1` (the 3D rod's) runs each run alone,
+    # without a second lane computing an idle copy (half the work), identical across chunkings
+    B = 1 if lanes == 1 else max(2, min(lanes, n_runs))
     order = jnp.argsort(~valid, stable=True).astype(jnp.int32)  # valid runs first, in order
     count = jnp.sum(valid, dtype=jnp.int32)
     slot = jnp.arange(B, dtype=jnp.int32)

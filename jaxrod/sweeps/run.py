@@ -104,7 +104,10 @@ def sweep(
       `refill_every` steps, inside one compiled loop ([`jaxrod.batching.run_pool`][]);
       `lanes` defaults to 16 for the reduced models and 1 for `"rod3d"` (the model's `sweep_lanes`);
       `"chunk"`: the whole chunk vmapped at once, running until its slowest member stops
-      (kept for comparison). Results are identical either way.
+      (kept for comparison). Results are identical either way, bit for bit with two lanes or
+      more; one lane runs each member alone (no idle lane beside it), which XLA rounds in the
+      last bit like an unbatched run: its labels and counts are the same, its numbers to
+      rounding, and any chunking of a one-lane sweep gives the same bits.
 
     **Several processes.** Under `jax.distributed` every process makes the same call (same
     arguments; a shared `path` to keep the chunks); process 0 writes `sweep.json` and its view
