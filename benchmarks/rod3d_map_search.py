@@ -46,6 +46,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results"))
     a = ap.parse_args()
     folder = os.path.join(ROOT, "results", "paper", "e3", f"map_rod3d_n{a.n}_search")
+    commit = _commit()  # before the run: it rewrites the committed map's files
     argv = ["map", "--model", "rod3d", "--n", str(a.n), "--out", folder]
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, JAXROD_CACHE_DIR=cache)
@@ -58,7 +59,7 @@ def main():
         fh.write(f"$ jaxrod {' '.join(argv)}\n{out.stdout}")
     summary = json.load(open(os.path.join(folder, "map.json")))
     found = _labels(os.path.join(folder, "map.csv"))
-    record = dict(command="jaxrod " + " ".join(argv), commit=_commit(), date=datetime.date.today().isoformat(),
+    record = dict(command="jaxrod " + " ".join(argv), commit=commit, date=datetime.date.today().isoformat(),
                   machine=f"{platform.machine()}, {os.cpu_count()} cores", cold_wall_s=wall,
                   runs=summary["fill"]["runs"], cells=summary["fill"]["cells"],
                   exponent={k: (m["exponent"], m["exponent_stderr"]) for k, m in summary["maps"].items()})
