@@ -27,7 +27,8 @@ __all__ = ['sweep']
 # Lanes per device when `sweep` is not told: the 3D rod's arrays of n segments already fill the
 # vector units, and a batch of them only adds memory traffic and friction sweeps run for the
 # slowest lane — 64 rods on 2 devices cost 17 / 74 µs per rod-step at 60 / 500 segments in 1
-# lane per device against 19 / 116 in 16 (benchmarks/README.md, "3D rod: batched rods").
+# lane per device against 19 / 116 in 16 (benchmarks/README.md, "3D rod: batched rods"; the one-lane
+# figures measured with an idle copy beside each run, which the pool no longer steps).
 
 
 def _expand(inputs: Mapping[str, object], combine: str):
