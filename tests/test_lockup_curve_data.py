@@ -28,8 +28,8 @@ def _rows(name):
 def test_every_bracket_rests_on_steady_stages_on_either_side_of_the_bound():
     stages = _rows("stages.csv")
     for row in _rows("curve.csv"):
-        if row["status"] != "bracketed" or row["kind"] != "run":
-            continue
+        if row["status"] != "bracketed" or row["kind"] != "run" or row["protocol"] != "staircase":
+            continue  # the other protocols' stages are in stage_protocols.json (the test below)
         lo, hi = float(row["lo"]), float(row["hi"])
         assert 0 < hi - lo <= 0.03 * hi, row
         far = row["quantity"] == "F_far_max"
@@ -183,3 +183,36 @@ def test_every_point_of_the_curve_has_its_single_step_row():
     assert {k: sorted(v) for k, v in ratios.items()} == {
         "0.5": ["-0.8"], "1.0": ["+26.3", "+29.2"], "1.5": ["-0.8"], "2.0": ["+4.0", "-0.3"], "3.0": ["+0.8"],
         "nan": ["+0.1"]}
+
+
+def test_the_other_protocols_rows_are_the_study_files_lanes():
+    """Each `curve.csv` row of another stage protocol is a lane of `stage_protocols.json` (its
+    bracket, status and stage count as written there, its crossing recomputed from the lane's
+    steady stages), every point of the curve has such rows, and each converged row's path band
+    spans its protocols' crossings against the base run's."""
+    from jaxrod.experiments.lockup_path import PROTOCOLS
+    from jaxrod.lockup.staircase import crossing
+
+    study = json.loads((DATA / "stage_protocols.json").read_text())
+    rows = _rows("curve.csv")
+    mine = [r for r in rows if r["protocol"] in PROTOCOLS.values()]
+    assert {(r["quantity"], r["muL_over_ell"]) for r in mine} == {(r["quantity"], r["muL_over_ell"])
+                                                                  for r in rows if r["kind"] == "converged"}
+    for r in mine:
+        key = r["source"].split(":", 1)[1]
+        point = "lock" if r["quantity"] == "muL_lock" else float(r["muL_over_ell"])
+        (lane,) = [ln for ln in study[key]["lanes"] if ln["point"] == point]
+        assert PROTOCOLS[study[key]["protocol"]] == r["protocol"] and (r["status"], int(r["stages"])) == (
+            lane["status"], lane["stages"])
+        got = crossing([dict(parameter=p, f_in=f, status="sliding") for p, f in lane["steady"]], 6.0)
+        assert (r["crossing"] == "nan") == (got is None)
+        if got is not None:
+            assert float(r["crossing"]) == pytest.approx(got[0], rel=1e-12)
+    for c in (r for r in rows if r["kind"] == "converged"):
+        base = [r for r in rows if r["kind"] == "run" and r["protocol"] == "staircase" and r["quantity"] == c["quantity"]
+                and r["muL_over_ell"] == c["muL_over_ell"] and r["segments_per_wave"] == "16" and r["push_speed"] == "0.01"]
+        d = [float(r["crossing"]) / float(base[0]["crossing"]) - 1 for r in mine if r["quantity"] == c["quantity"]
+             and r["muL_over_ell"] == c["muL_over_ell"] and r["crossing"] != "nan"]
+        assert int(c["path_protocols"]) == len(d)
+        assert (float(c["d_path_lo"]), float(c["d_path_hi"])) == (pytest.approx(min([0.0, *d])),
+                                                                  pytest.approx(max([0.0, *d])))
