@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import subprocess
 import time
 
 RESULTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
@@ -129,6 +130,15 @@ def timed(fn, *args, repeats=3, budget=4.0):
         dt = time.perf_counter() - t0
         best, spent = min(best, dt), spent + dt
     return out, first, (best if repeats else first)
+
+
+def commit(root: str = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) -> str:
+    """The short commit of the tree at `root` (this repository by default), with `+changes`
+    where a tracked file differs from it."""
+    out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True)
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root, capture_output=True,
+                           text=True).stdout.strip()
+    return out.stdout.strip() + ("+changes" if dirty else "")
 
 
 def device_info(dtype="float64") -> dict:

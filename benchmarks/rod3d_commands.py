@@ -23,15 +23,11 @@ import sys
 import tempfile
 import time
 
+from _common import commit  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXPLICIT = os.path.join(ROOT, "results", "paper", "e3", "rod3d_boundary_n500_leapfrog.csv")
 
-
-def _commit() -> str:
-    out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True,
-                           text=True).stdout.strip()
-    return out.stdout.strip() + ("+changes" if dirty else "")
 
 
 def _command(argv, cache):
@@ -113,7 +109,7 @@ def main():
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    stamp = (f"commit {_commit()}, {datetime.date.today().isoformat()}, {platform.machine()} "
+    stamp = (f"commit {commit()}, {datetime.date.today().isoformat()}, {platform.machine()} "
              f"{os.cpu_count()} cores, Python {platform.python_version()}")
     lines = [f"# `jaxrod {' '.join(argv)}`", "", stamp, "",
              "| call | wall [s] | ΔF [N] | v₀* [mm/s] | runs | explicit bracket [mm/s] | difference |",

@@ -23,15 +23,11 @@ import sys
 import tempfile
 import time
 
+from _common import commit  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 FULL = os.path.join(ROOT, "results", "paper", "e3", "map_rod3d_n500.csv")
 
-
-def _commit() -> str:
-    out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True)
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True,
-                           text=True).stdout.strip()
-    return out.stdout.strip() + ("+changes" if dirty else "")
 
 
 def _labels(path):
@@ -46,7 +42,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results"))
     a = ap.parse_args()
     folder = os.path.join(ROOT, "results", "paper", "e3", f"map_rod3d_n{a.n}_search")
-    commit = _commit()  # before the run: it rewrites the committed map's files
+    at = commit()  # before the run: it rewrites the committed map's files
     argv = ["map", "--model", "rod3d", "--n", str(a.n), "--out", folder]
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, JAXROD_CACHE_DIR=cache)
@@ -59,7 +55,7 @@ def main():
         fh.write(f"$ jaxrod {' '.join(argv)}\n{out.stdout}")
     summary = json.load(open(os.path.join(folder, "map.json")))
     found = _labels(os.path.join(folder, "map.csv"))
-    record = dict(command="jaxrod " + " ".join(argv), commit=commit, date=datetime.date.today().isoformat(),
+    record = dict(command="jaxrod " + " ".join(argv), commit=at, date=datetime.date.today().isoformat(),
                   machine=f"{platform.machine()}, {os.cpu_count()} cores", cold_wall_s=wall,
                   runs=summary["fill"]["runs"], cells=summary["fill"]["cells"],
                   exponent={k: (m["exponent"], m["exponent_stderr"]) for k, m in summary["maps"].items()})

@@ -16,12 +16,13 @@ import datetime
 import json
 import os
 import platform
-import subprocess
 import time
 
 import jax
 
 jax.config.update("jax_enable_x64", True)
+
+from _common import commit  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -56,8 +57,7 @@ def main():
             t = time.perf_counter()
             f()
             walls[name].append(time.perf_counter() - t)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    record = dict(commit=commit, date=datetime.date.today().isoformat(), machine=f"{platform.machine()}, {os.cpu_count()} cores",
+    record = dict(commit=commit(ROOT), date=datetime.date.today().isoformat(), machine=f"{platform.machine()}, {os.cpu_count()} cores",
                   devices=jax.local_device_count(), scheme=res.meta["scheme"], dt=dt, steps=steps, t1=a.t1,
                   us_per_step={k: 1e6 * min(v) / steps for k, v in walls.items()}, walls_s=walls)
     with open(a.out, "w") as fh:
