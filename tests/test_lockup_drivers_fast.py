@@ -90,13 +90,13 @@ def test_the_jobs_are_each_group_at_the_base_run_and_its_converge_lanes_at_the_o
     segments, half and a quarter of the speed (the quasi-static limit and the segment convergence
     at every point, issue [lockup-converged]); μL/ℓ = 4 (past the bound's lock-up) only at the base;
     the `refine` lanes (μL/ℓ = 0.5 and 3) also at four times the base's segments, and μL/ℓ = 3 at twice
-    them at half the speed."""
+    them at half and a quarter of the speed."""
     jobs = list(lx._jobs(lx.SETTINGS[False]))
     runs = [(16, 10e-3), (32, 10e-3), (16, 5e-3), (16, 2.5e-3)]
     assert jobs == ([((2.0, (0.5, 1.0, 1.5, 2.0), None), run) for run in runs]
                     + [((4.0, (3.0, 4.0), "auto"), runs[0])] + [((4.0, (3.0,), "auto"), run) for run in runs[1:]]
                     + [((2.0, (0.5,), None), (64, 10e-3)), ((4.0, (3.0,), None), (64, 10e-3)),
-                       ((4.0, (3.0,), None), (32, 5e-3))])
+                       ((4.0, (3.0,), None), (32, 5e-3)), ((4.0, (3.0,), None), (32, 2.5e-3))])
     # without "lock" in converge a group with no converge lane is not run again; without converge
     # every lane runs at every setting
     S = dict(groups=((1.5, (0.5,), 0.7), (3.0, (2.0,), None)), runs=((8, 0.02), (12, 0.02)), converge=(2.0,))

@@ -46,7 +46,8 @@ SETTINGS = {
     # speed moves the answer)
     False: dict(groups=((2.0, (0.5, 1.0, 1.5, 2.0), None), (4.0, (3.0, 4.0), "auto")), f_c=6.0,
                 runs=((16, 10e-3), (32, 10e-3), (16, 5e-3), (16, 2.5e-3)), converge=(0.5, 1.0, 1.5, 2.0, 3.0, "lock"),
-                refine=((2.0, 0.5, (64, 10e-3)), (4.0, 3.0, (64, 10e-3)), (4.0, 3.0, (32, 5e-3))),
+                refine=((2.0, 0.5, (64, 10e-3)), (4.0, 3.0, (64, 10e-3)), (4.0, 3.0, (32, 5e-3)),
+                        (4.0, 3.0, (32, 2.5e-3))),
                 first_push=0.4, stage_push=0.15, max_stages=16, saves_per_stage=41),
     True: dict(groups=((2.0, (0.5, 1.0, 2.0), None),), f_c=6.0, runs=((16, 10e-3),), first_push=0.4,
                stage_push=0.15, max_stages=8, saves_per_stage=41),
