@@ -668,6 +668,34 @@ def test_a_point_refined_to_four_times_the_segments_is_judged_on_the_last_refine
     assert slow["error_bar"] == pytest.approx(0.01 + 0.002 + 0.03)  # the v/2 pair's change, not |3.66 − 3.80|
     (off,) = converged(apart + [run(32, 0.005, 3.75)], S)  # +2.7 % at v/2: not converged, named
     assert not off["converged_segments"] and off["segments_pair"] == "32/16 at v/2"
+    assert math.isnan(off["d_segments_faster"])
+
+
+def test_a_point_run_at_twice_the_segments_at_a_quarter_of_the_speed_is_judged_there():
+    """Where the point also ran at 2n at v/4, the speed its value is read from, that pair alone
+    decides the segments: +0.27 % at v/4 converges though 2n at v/2 was +2.7 % (kept as
+    `d_segments_faster`), and the bar's segment term is |c(2n, v/4) − c(n, v/4)|; −2.5 % at v/4
+    does not converge though every faster pair did."""
+    from jaxrod.experiments.lockup_convergence import converged
+
+    S = {"runs": ((16, 0.01), (32, 0.01), (16, 0.005), (16, 0.0025))}
+
+    def run(w, v, c, e=0.002):
+        return dict(quantity="F_far_max", muL_over_ell=3.0, kind="run", segments_per_wave=w, push_speed=v,
+                    status="bracketed", lo=c - 0.05, hi=c + 0.05, crossing=c, crossing_error=e)
+
+    rows = [run(16, 0.01, 3.50), run(32, 0.01, 3.80), run(16, 0.005, 3.65), run(16, 0.0025, 3.66),
+            run(64, 0.01, 3.81), run(32, 0.005, 3.75)]
+    (pt,) = converged(rows + [run(32, 0.0025, 3.67)], S)
+    assert pt["converged_segments"] and pt["segments_pair"] == "32/16 at v/4"
+    assert pt["d_segments"] == pytest.approx(3.67 / 3.66 - 1)
+    assert pt["d_segments_faster"] == pytest.approx(3.75 / 3.65 - 1)
+    assert pt["quasi_static"] == pytest.approx(3.66)
+    assert pt["error_bar"] == pytest.approx(0.01 + 0.002 + 0.01)
+    (bad,) = converged([run(16, 0.01, 3.50), run(32, 0.01, 3.52), run(16, 0.005, 3.65), run(16, 0.0025, 3.66),
+                        run(32, 0.0025, 3.66 * 0.975)], S)
+    assert not bad["converged_segments"] and bad["d_segments"] == pytest.approx(-0.025)
+    assert bad["d_segments_faster"] == pytest.approx(3.52 / 3.50 - 1)
 
 
 def test_the_path_band_is_the_other_protocols_crossings_against_the_base_run(tmp_path):

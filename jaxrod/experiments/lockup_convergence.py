@@ -30,7 +30,11 @@ def converged(rows, S) -> list:
       (`S["refine"]`); and 2n against n at v/2 where the point ran at 2n there too. Converged when
       each is within `SEGMENTS_TOL`; the segment error is the largest change among them, and where
       the only pair is at v but the point ran at 4n, also the distance of the value (at n, v → 0)
-      from c(2n) (at v): an estimate, not a bound;
+      from c(2n) (at v): an estimate, not a bound. Where the point ran at 2n at v/4 too, that
+      pair alone decides (the segments tested at the speed the value is read from; where the
+      segments' effect moves with the speed, a faster pair says nothing of the value's): its
+      change is the segment error, and the other pairs' largest change is kept as
+      `d_segments_faster` (NaN where there is no such pair);
     - the error bar: speed + interpolation + segment errors; `lo`, `hi` the value ± the bar;
       `bracket_lo`, `bracket_hi` the bracket of the run the value is read from (v/4 at n);
     - `d_segments` (the pair named in `segments_pair` with the largest change), `d_half_speed`
@@ -46,7 +50,7 @@ def converged(rows, S) -> list:
     want = {"base": (w0, v0), "fine": (2 * w0, v0), "half": (w0, v0 / 2), "quarter": (w0, v0 / 4)}
     if any(r not in S["runs"] for r in want.values()):
         return []
-    want.update(finer=(4 * w0, v0), fine_half=(2 * w0, v0 / 2))  # where run (`S["refine"]`)
+    want.update(finer=(4 * w0, v0), fine_half=(2 * w0, v0 / 2), fine_quarter=(2 * w0, v0 / 4))  # where run
     out = []
     points = sorted({(r["quantity"], r["muL_over_ell"]) for r in rows if r["kind"] == "run"},
                     key=lambda k: (k[0], 0.0 if math.isnan(k[1]) else k[1]))
@@ -63,7 +67,7 @@ def converged(rows, S) -> list:
                    and not math.isnan(r.get("crossing", math.nan))]
             if hit:
                 runs[name] = hit[0]
-        if any(k not in runs for k in want if k not in ("finer", "fine_half")):
+        if any(k not in runs for k in want if k not in ("finer", "fine_half", "fine_quarter")):
             continue
         c = {k: r["crossing"] for k, r in runs.items()}
         e = {k: r["crossing_error"] for k, r in runs.items()}
@@ -79,8 +83,13 @@ def converged(rows, S) -> list:
         if "fine_half" in c:
             pairs.append((f"{2 * w0}/{w0} at v/2", "fine_half", "half"))
         changes = [(abs(c[a] / c[b] - 1), c[a] / c[b] - 1, name, abs(c[a] - c[b])) for name, a, b in pairs]
+        faster = math.nan
+        if "fine_quarter" in c:  # the pair at the value's own speed decides; the faster ones are kept
+            faster = max(changes)[1]
+            changes = [(abs(c["fine_quarter"] / c["quarter"] - 1), c["fine_quarter"] / c["quarter"] - 1,
+                        f"{2 * w0}/{w0} at v/4", abs(c["fine_quarter"] - c["quarter"]))]
         seg_err = max(ch[3] for ch in changes)
-        if "finer" in c and "fine_half" not in c:
+        if "finer" in c and "fine_half" not in c and "fine_quarter" not in c:
             seg_err = max(seg_err, abs(value - c["fine"]))
         _, d_seg, pair, _ = max(changes)
         bar = speed_err + interp + seg_err
@@ -92,7 +101,8 @@ def converged(rows, S) -> list:
         out.append(dict(runs["base"], kind="converged", push_speed=0.0, lo=value - bar, hi=value + bar,
                         status="converged in speed" if speed_ok else "extrapolated to v = 0", stages=math.nan,
                         crossing=math.nan, crossing_error=math.nan, bracket_lo=q["lo"], bracket_hi=q["hi"],
-                        quasi_static=value, error_bar=bar, d_segments=d_seg, segments_pair=pair, d_half_speed=d_half,
+                        quasi_static=value, error_bar=bar, d_segments=d_seg, segments_pair=pair,
+                        d_segments_faster=faster, d_half_speed=d_half,
                         d_quarter_speed=d_quarter, converged_segments=all(ch[0] <= SEGMENTS_TOL for ch in changes),
                         converged_speed=speed_ok, d_path_lo=min([0.0, *others]), d_path_hi=max([0.0, *others]),
                         path_protocols=len(others)))
