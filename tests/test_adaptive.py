@@ -94,6 +94,48 @@ def test_the_error_estimate_is_newmarks_local_error_on_the_free_translations():
     assert free.tolist() == [False] + [True] * 7 + [False]  # fork ends: both end nodes held (control "force")
     assert err == pytest.approx(np.sqrt(np.mean(ratio[free] ** 2)), rel=1e-12)
     assert err > 0
+    # the factor |β − 1/6| at another β (at ¼ it is 1/12, as |¼ − 1/3| would be): zero at 1/6
+    assert float(model.step_error(q0, q1, a0, a1, h, 0.5, 1e-3, 1e-12)) == pytest.approx(err * 4.0, rel=1e-12)
+    assert float(model.step_error(q0, q1, a0, a1, h, 1.0 / 6.0, 1e-3, 1e-12)) == pytest.approx(0.0, abs=1e-12 * err)
+
+
+def test_a_step_after_a_rejection_does_not_grow_and_one_after_an_acceptance_doubles_at_most():
+    """The controller's factor clip(0.9 err^(−1/3), 0.2, 2) with a loose tolerance (err ≪ 1): the
+    next step twice the one just taken, but equal to it right after a rejected attempt (Hairer,
+    Nørsett & Wanner, II.4); a tight tolerance rejects the attempt, keeps the state and shrinks
+    the step by at most 5×."""
+    import dataclasses
+
+    from jaxrod.integrators.base import save_grid
+
+    model, q0, v0 = _rod()
+    dt = 50 * float(step_limit(model))
+    opts = jr.RunOptions(stop_on_buckle=False, stop_when_stuck=False)
+    m, h = save_grid(0.25, 6, dt)
+    h = jnp.asarray(h)
+    for rejected_last, grows in ((False, 2.0), (True, 1.0)):
+        integ = jr.AdaptiveImplicitLeapfrog(dt, rtol=1.0, atol=1.0, dt0=dt / 8)
+        s = integ.start(model, q0, v0, opts)
+        s = dataclasses.replace(s, control=dataclasses.replace(s.control, rejected_last=jnp.array(rejected_last)))
+        s1 = integ.advance(model, s, h, m, 6, opts)
+        assert int(s1.steps) == 1 and int(s1.control.rejected) == 0
+        assert float(s1.control.h_prev) == pytest.approx(dt / 8, rel=1e-12)
+        assert float(s1.control.h_next) == pytest.approx(grows * dt / 8, rel=1e-12)
+    tight = jr.AdaptiveImplicitLeapfrog(dt, rtol=0.0, atol=1e-30, dt0=dt / 8)
+    s = tight.start(model, q0, v0, opts)
+    s1 = tight.advance(model, s, h, m, 6, opts)
+    assert int(s1.steps) == 0 and int(s1.control.rejected) == 1 and bool(s1.control.rejected_last)
+    assert np.array_equal(np.asarray(s1.q.x), np.asarray(q0.x))
+    assert float(s1.control.h_next) == pytest.approx(0.2 * dt / 8, rel=1e-12)
+    # accepted exactly where the scaled estimate is at most 1: at 0.9 taken, at 1.5 rejected
+    loose = jr.AdaptiveImplicitLeapfrog(dt, rtol=0.0, atol=1.0, dt0=dt / 8)
+    s = loose.start(model, q0, v0, opts)
+    s1 = loose.advance(model, s, h, m, 6, opts)
+    err = float(model.step_error(s.q, s1.q, s.a, s1.a, dt / 8, 0.25, 0.0, 1.0))  # the attempt's, in metres
+    for ratio, taken in ((0.9, 1), (1.5, 0)):
+        integ = jr.AdaptiveImplicitLeapfrog(dt, rtol=0.0, atol=err / ratio, dt0=dt / 8)
+        s1 = integ.advance(model, integ.start(model, q0, v0, opts), h, m, 6, opts)
+        assert (int(s1.steps), int(s1.control.rejected)) == (taken, 1 - taken)
 
 
 @pytest.mark.parametrize("kw, name", [(dict(rtol=-1.0), "rtol"), (dict(atol=float("nan")), "atol"),
