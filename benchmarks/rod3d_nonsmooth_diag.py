@@ -13,6 +13,7 @@ subcommand prints one JSON line per result; the committed lines are in
     python benchmarks/rod3d_nonsmooth_diag.py gamma-layer                          # gamma's effect against the step (~1 min)
     python benchmarks/rod3d_nonsmooth_diag.py e4-gates --gamma 0 --dt 2e-5         # E4 B and C, mu 0.05/0.3/1, 3 realizations
     python benchmarks/rod3d_nonsmooth_diag.py adaptive-steps --n 60 500            # the error-controlled step on E4 C
+    python benchmarks/rod3d_nonsmooth_diag.py adaptive-damped --n 60 500 --gamma 0.1  # and with gamma, on E3's run
     python benchmarks/rod3d_nonsmooth_diag.py b-ends --scheme coupled               # E4 B's bracket ends, one scheme
     python benchmarks/rod3d_nonsmooth_diag.py b-decay --scheme coupled --dt 1e-5 5e-6  # E4 B's first 0.1 s: energy, stick
     python benchmarks/rod3d_nonsmooth_diag.py spin                                 # a free spinning rod's angular momentum
@@ -271,6 +272,48 @@ def adaptive_steps(args):
                               wall_s=round(time.perf_counter() - t, 1))), flush=True)
 
 
+def adaptive_damped(args):
+    """E3's run (μ = 0.3, ΔF = `--dF`, sine mode 6 at `--v0`, `--t1` s, 11 saves) at each `--n`:
+    the explicit leapfrog at half its limit (the reference), the fixed implicit step (γ = 0.1,
+    5e-5 s) and `AdaptiveImplicitLeapfrog` with γ = `--gamma` at each `--rtol` (atol 1e-9 m,
+    largest step `--dt-max`): each one's largest amplitude difference from the reference over the
+    saves, relative to the reference's largest amplitude; steps, rejections, smallest and largest
+    step against the explicit limit. Asks whether the controller, with γ taking the stiff modes it
+    cannot resolve, steps as far as the fixed step and says what the error is."""
+    from jaxrod.rod3d import step_limit
+
+    rod = jr.RodChannel.reference(0.3)
+    for n in args.n:
+        ref = None
+        runs = [("explicit", "leapfrog", None, None)] + [("fixed", None, None, None)]
+        runs += [(f"adaptive rtol {r:g}", "adaptive", r, args.dt_max) for r in args.rtol]
+        for name, key, rtol, dt in runs:
+            if key == "adaptive":
+                tol, damping = rtol, args.gamma
+
+                class Adaptive(jr.AdaptiveImplicitLeapfrog):
+                    rtol: float = tol
+                    gamma: float = eqx.field(static=True, default=damping)
+
+                SCHEMES["adaptive"] = Adaptive
+            scene = jr.Scene(rod, args.dF, perturbation=jr.SineVelocity(args.v0, 6.0), kind="rod3d", n=n,
+                             scheme_key=key, dt=dt)
+            t = time.perf_counter()
+            sol = scene.run(t1=args.t1, n_save=11, save_state=False)
+            amp = np.asarray(sol.amplitude)
+            wall = time.perf_counter() - t
+            ref = amp if ref is None else ref
+            limit = float(step_limit(scene.model()))
+            stats = {k: float(v) for k, v in sol.step_stats.items()} if key == "adaptive" else {}
+            print(json.dumps(dict(what="E3 run, adaptive steps with damping", n=n, dF=args.dF, v0=args.v0, t1=args.t1,
+                                  scheme=name, gamma=args.gamma if key == "adaptive" else None,
+                                  result=int(sol.result), steps=int(sol.n_steps), explicit_limit=limit,
+                                  mean_step_over_limit=args.t1 / int(sol.n_steps) / limit, **stats,
+                                  amplitude_end=float(amp[-1]),
+                                  amplitude_diff=float(np.max(np.abs(amp - ref)) / np.max(np.abs(ref))),
+                                  wall_s=round(wall, 1))), flush=True)
+
+
 def b_ends(args):
     """E4 B (random velocity ±15 mm/s, realization 0) at μ = 0.05, 500 segments, 0.5 s, at the two
     ends of the search's bracket (1.352 and 3.043 N): buckled or not, when and the amplitude every
@@ -405,6 +448,14 @@ def main():
     p.add_argument("--t1", type=float, default=0.05)
     p.add_argument("--rtol", type=float, default=1e-2)
     p.add_argument("--atol", type=float, default=1e-9)
+    p = sub.add_parser("adaptive-damped")
+    p.add_argument("--n", type=int, nargs="+", default=[60, 500])
+    p.add_argument("--dF", type=float, default=5.0)
+    p.add_argument("--v0", type=float, default=0.02)
+    p.add_argument("--t1", type=float, default=0.1)
+    p.add_argument("--gamma", type=float, default=0.1)
+    p.add_argument("--rtol", type=float, nargs="+", default=[1e-1, 1e-2, 1e-3])
+    p.add_argument("--dt-max", type=float, default=2e-4)
     p = sub.add_parser("e4-gates")
     p.add_argument("--scheme", choices=["local", "coupled"], default="local")
     p.add_argument("--gamma", type=float, default=0.0)
@@ -431,7 +482,7 @@ def main():
     args = ap.parse_args()
     {"e4": e4, "e4-forcing": e4_forcing, "e4-warmup": e4_warmup, "wrinkle": wrinkle, "vstar": vstar, "modes": modes,
      "gamma-layer": gamma_layer, "e4-gates": e4_gates, "adaptive-steps": adaptive_steps,
-     "b-ends": b_ends, "b-decay": b_decay, "spin": spin}[args.cmd](args)
+     "adaptive-damped": adaptive_damped, "b-ends": b_ends, "b-decay": b_decay, "spin": spin}[args.cmd](args)
 
 
 if __name__ == "__main__":
