@@ -32,6 +32,7 @@ ROD3D_TESTS = ["test_rod3d.py", "test_rod3d_contact.py", "test_rod3d_coupled.py"
                "test_rod3d_random_position.py", "test_rod3d_physics.py", "test_engine.py", "test_leapfrog.py",
                "test_independent_reference.py", "test_experiments_rod3d_fast.py", "test_e3_rod3d.py",
                "test_lockup_push.py"]
+ADAPTIVE_TESTS = ["test_adaptive.py", "test_rod3d_implicit.py", "test_engine.py", "test_sweep.py"]
 LOCKUP_TESTS = ["test_lockup_drivers_fast.py", "test_lockup_staircase.py", "test_lockup_push.py",
                 "test_lockup_verdict.py", "test_lockup_curve_data.py"]
 
@@ -83,6 +84,18 @@ BUGS = {
     "staircase_lo_above": ("jaxrod/lockup/staircase.py", "    if status == SLIDING and f_bar <= f_c:",
                            "    if status == SLIDING and f_bar <= 1.05 * f_c:",
                            "a steady stage up to 5 % above the bound counted as a lower bound", LOCKUP_TESTS),
+    "crossing_nearest_stage": ("jaxrod/lockup/staircase.py", "linear = x0 + (f_c - f0) * (x1 - x0) / (f1 - f0)",
+                               "linear = x0 if f_c - f0 < f1 - f_c else x1",
+                               "the crossing read as the nearer stage instead of interpolated", LOCKUP_TESTS),
+    "error_estimate_beta": ("jaxrod/rod3d/step_error.py", "jnp.abs(beta - 1.0 / 6.0)", "jnp.abs(beta - 1.0 / 3.0)",
+                            "the step's error estimate with |β − 1/3| for |β − 1/6| (equal at β = ¼)", ADAPTIVE_TESTS),
+    "controller_accept_2": ("jaxrod/integrators/adaptive.py", "(frozen | (err <= 1.0) | at_min)",
+                            "(frozen | (err <= 2.0) | at_min)",
+                            "the step controller accepts a step at twice the tolerance", ADAPTIVE_TESTS),
+    "controller_grows_after_reject": ("jaxrod/integrators/adaptive.py",
+                                      "grow = jnp.where(accept, jnp.where(c.rejected_last, 1.0, FACTOR_MAX), 0.9)",
+                                      "grow = jnp.where(accept, FACTOR_MAX, 0.9)",
+                                      "the step grows right after a rejected attempt", ADAPTIVE_TESTS),
 }
 
 
