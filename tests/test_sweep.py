@@ -617,3 +617,38 @@ def test_zipped_inputs_of_length_one_make_one_member():
         np.testing.assert_array_equal(zipped.outputs[k], grid.outputs[k])
     wide = sweep(spec, {"dF": [2.0], "amplitude": [0.01, 0.02]}, combine="zip", progress=False)
     np.testing.assert_array_equal(wide.inputs["dF"], [2.0, 2.0])
+
+
+def test_a_pools_given_chunk_size_pads_smaller_sweeps_to_one_program_and_resolved_names_their_resolution(caplog):
+    """Under the pool a given `chunk_size` is kept above the member count (the padding never
+    runs): sweeps of 3 and 2 members at chunk size 4 compile one program and give the numbers of
+    the same members swept without padding; `resolved` fills in the n and dt a sweep over the
+    inputs runs at (the Galerkin model's at the largest load), and a sweep of part of the inputs
+    under it runs there too."""
+    from jaxrod.sweeps import resolved
+
+    spec = SweepSpec(model="galerkin", t1=0.01)
+    grid = {"dF": [1.0, 40.0], "amplitude": 0.01}
+    whole = sweep(spec, grid, progress=False)
+    fixed = resolved(spec, grid)
+    assert (fixed.n, fixed.dt) == (whole.meta["n"], whole.meta["dt"]) and spec.dt is None
+    part = sweep(fixed, {"dF": [1.0], "amplitude": 0.01}, progress=False)
+    assert (part.meta["n"], part.meta["dt"]) == (whole.meta["n"], whole.meta["dt"])
+    np.testing.assert_allclose(part.outputs["max_theta"], whole.outputs["max_theta"][:1], rtol=1e-12)  # another width: rounding
+    mode = SweepSpec(model="mode", t1=0.01, dt=1e-4)
+    plain = sweep(mode, {"dF": [1.0, 2.0, 3.0], "amplitude": 0.01}, progress=False)
+    jax.config.update("jax_log_compiles", True)
+    try:
+        with caplog.at_level(logging.WARNING, logger="jax"):
+            three = sweep(mode, {"dF": [1.0, 2.0, 3.0], "amplitude": 0.01}, chunk_size=4, progress=False)
+            two = sweep(mode, {"dF": [1.0, 2.0], "amplitude": 0.01}, chunk_size=4, progress=False)
+    finally:
+        jax.config.update("jax_log_compiles", False)
+    compiles = [r.getMessage() for r in caplog.records if r.getMessage().startswith("Compiling jit(run_chunk)")]
+    assert len(compiles) == 1, compiles
+    assert three.meta["chunk_size"] == 4 and two.meta["chunk_size"] == 4 and plain.meta["chunk_size"] == 3
+    for k in plain.outputs:  # the same labels and steps; numbers to rounding (XLA compiles another width differently)
+        same = np.testing.assert_allclose if plain.outputs[k].dtype.kind == "f" else np.testing.assert_array_equal
+        kw = dict(rtol=1e-12) if plain.outputs[k].dtype.kind == "f" else {}
+        same(three.outputs[k], plain.outputs[k], **kw)
+        same(two.outputs[k], plain.outputs[k][:2], **kw)

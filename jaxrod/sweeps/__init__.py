@@ -24,9 +24,10 @@ bit for bit, and a re-run with any number of processes completes only the missin
 from .member import N_SAVE as N_SAVE
 from .result import SweepResult as SweepResult
 from .result import wilson_interval as wilson_interval
+from .run import resolved as resolved
 from .run import sweep as sweep
 from .spec import OUTPUTS as OUTPUTS
 from .spec import PARAMETERS as PARAMETERS
 from .spec import SweepSpec as SweepSpec
 
-__all__ = ["SweepSpec", "SweepResult", "sweep", "PARAMETERS", "OUTPUTS", "N_SAVE", "wilson_interval"]
+__all__ = ["SweepSpec", "SweepResult", "sweep", "resolved", "PARAMETERS", "OUTPUTS", "N_SAVE", "wilson_interval"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import json
+import dataclasses
 import math
 import os
 import time
@@ -22,13 +23,22 @@ from .result import SweepResult, _FILL
 from .spec import OUTPUTS, PARAMETERS, SweepSpec
 from .store import _atomic_write, _chunk_file, _dump_json, _fingerprint, _meta_file, _read_meta
 
-__all__ = ['sweep']
+__all__ = ['sweep', 'resolved']
 
 # Lanes per device when `sweep` is not told: the 3D rod's arrays of n segments already fill the
 # vector units, and a batch of them only adds memory traffic and friction sweeps run for the
 # slowest lane — 64 rods on 2 devices cost 17 / 74 µs per rod-step at 60 / 500 segments in 1
 # lane per device against 19 / 116 in 16 (benchmarks/README.md, "3D rod: batched rods"; the one-lane
 # figures measured with an idle copy beside each run, which the pool no longer steps).
+
+
+def resolved(spec: SweepSpec, inputs: Mapping[str, object], combine: str = "grid") -> SweepSpec:
+    """`spec` with the size `n` and step `dt` that `sweep(spec, inputs, combine)` runs its members
+    at (the largest load's size and the stiffest member's step) filled in: sweeps of parts of
+    `inputs` under it run at that resolution and share one compiled program."""
+    flat, _, _ = _expand(inputs, combine)
+    n, dt, _, _ = _static_resolution(spec, flat)
+    return dataclasses.replace(spec, n=n, dt=dt)
 
 
 def _expand(inputs: Mapping[str, object], combine: str):
@@ -96,7 +106,9 @@ def sweep(
       sweep at the same path is refused.
     - `chunk_size`: members per chunk (rounded up to a multiple of the device count); default
       from `memory_mb`, at most 1024 (larger chunks wait longer for their slowest member). The
-      unit of work dealt to the processes of a distributed run.
+      unit of work dealt to the processes of a distributed run. A chunk is cut to the members
+      there are, except a given `chunk_size` under `"pool"`: the chunk is padded to it (the pool
+      never runs the padding), so sweeps of up to that many members share one compiled program.
     - `members`: a sub-range of global member indices to run.
     - `progress`: show a progress bar (members, members/s); `on_chunk(c)`: called after
       chunk c is finished (and written).
@@ -149,19 +161,23 @@ def sweep(
     n, dt, grid_dt, scheme = _static_resolution(spec, flat)
     n_dev = jax.local_device_count()
     n_proc = jax.process_count()
+    given = chunk_size is not None
     if chunk_size is None:
         chunk_size = int(max(1, min(1024, memory_mb * 2**20 // _bytes_per_member(spec, n))))
     if not (isinstance(chunk_size, int) and chunk_size >= 1):
         raise ValueError(f"chunk_size = {chunk_size!r} is invalid: expected an int >= 1.")
     if scheduling not in ("pool", "chunk"):
         raise ValueError(f"scheduling = {scheduling!r} is invalid: expected 'pool' or 'chunk'.")
+    # a chunk is as long as the members unless a pool's chunk size was given: padding is free
+    # there (a pool never runs it), and sweeps of fewer members then reuse one compiled program
+    keep = given and scheduling == "pool"
     if lanes is None:
         lanes = recipe(spec.model).sweep_lanes or DEFAULT_LANES
     for name, val in (("lanes", lanes), ("refill_every", refill_every)):
         if not (isinstance(val, int) and val >= 1):
             raise ValueError(f"{name} = {val!r} is invalid: expected an int >= 1.")
     index = np.arange(members.start, members.stop)
-    chunk_size = math.ceil(min(chunk_size, len(index)) / n_dev) * n_dev
+    chunk_size = math.ceil((chunk_size if keep else min(chunk_size, len(index))) / n_dev) * n_dev
     sel = {k: v[index] for k, v in flat.items()}
     dtype = str(jnp.result_type(float))
     meta = {
