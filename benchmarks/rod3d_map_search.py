@@ -7,7 +7,8 @@ that ran every cell (`results/paper/e3/map_rod3d_n500.csv`).
 
 Writes the map under `results/paper/e3/map_rod3d_n500_search/` and `rod3d_map_search.json`
 (commit, date, machine, wall, runs, label agreement) under `--out` (default benchmarks/results/).
-Run it alone on a quiet machine: the figure is a wall-clock time.
+Run it alone on a quiet machine: the figure is a wall-clock time. The map's sweep folders left by an
+earlier run are deleted first (a sweep resumes from its folder: the command would not run again).
 """
 
 from __future__ import annotations
@@ -15,9 +16,11 @@ from __future__ import annotations
 import argparse
 import csv
 import datetime
+import glob
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -44,6 +47,8 @@ def main():
     folder = os.path.join(ROOT, "results", "paper", "e3", f"map_rod3d_n{a.n}_search")
     at = commit()  # before the run: it rewrites the committed map's files
     argv = ["map", "--model", "rod3d", "--n", str(a.n), "--out", folder]
+    for old in glob.glob(os.path.join(folder, "sweep_*")):
+        shutil.rmtree(old)
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, JAXROD_CACHE_DIR=cache)
         t = time.perf_counter()

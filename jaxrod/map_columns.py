@@ -9,27 +9,36 @@ field model's and the 3D rod's maps); a column that is not would be labelled wro
 cells the search ran, so the cells it ran are marked (`ran`) and the full grid stays one option
 away (`stability_map(..., fill="grid")`). Each round runs one cell per unresolved column, all
 columns of a round side by side as one sweep (`combine="zip"`); a column whose run fails is run
-whole. About log₂(amplitudes + 1) runs per column instead of one per cell.
+whole. About log₂(amplitudes + 1) runs per column instead of one per cell; from a guess of each
+column's boundary (a cheaper model's map: `jaxrod.stability_map` guides the 3D rod's by the field
+model's), about two.
 
 Layer: above `jaxrod.sweeps`, below `jaxrod.stability_map`.
 """
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
-from .sweeps import SweepResult, SweepSpec, sweep
+from .sweeps import SweepResult, SweepSpec, resolved, sweep
 
 __all__ = ["search_columns"]
 
 
-def search_columns(spec: SweepSpec, dF, v0, *, path: str | None = None, progress: bool = True,
+def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = None, progress: bool = True,
                    chunk_size: int | None = None) -> SweepResult:
     """The grid `dF` × `v0` of `spec`'s sweep (as `sweep(spec, {"dF": dF, "amplitude": v0})`
     gives it) with each column's boundary found by bisection (module docstring). `v0` ascending.
-    Round r's sweep is written under `path` + `_round<r>` (resumable as any sweep).
+    Round r's sweep is written under `path` + `_round<r>` (resumable as any sweep). Every round
+    runs at the whole grid's size and step (`jaxrod.sweeps.resolved`) in chunks of `chunk_size`
+    (default: the number of loads), so that all rounds share one compiled program.
+
+    `guess`: per column the index of its predicted first buckled cell (0 to len(v0), len(v0):
+    none buckles; e.g. a cheaper model's map). The column's first run is that cell (the top cell
+    where none is predicted to buckle), its next the cell beside it on the other side of the
+    predicted boundary, and so on outward at steps 1, 2, 4, … until a stable and a buckled cell
+    bracket the boundary, then bisection between them: two runs a column where the guess is right,
+    one where it says the whole column buckles (or none of it does) and it does.
 
     **Returns:** a `SweepResult` of shape (len(dF), len(v0)) whose outputs are the runs' where a
     cell ran and, where it did not, the label its column implies (`buckled`; `result` successful;
@@ -40,13 +49,20 @@ def search_columns(spec: SweepSpec, dF, v0, *, path: str | None = None, progress
         raise ValueError(f"v0 = {v0.tolist()!r} is invalid for a column search: expected ascending amplitudes.")
     k, m = len(dF), len(v0)
     lo, hi = np.full(k, -1), np.full(k, m)  # per column: the highest stable cell ran, the lowest buckled one
+    if guess is not None:
+        guess = np.asarray(guess, int)
+        if guess.shape != (k,) or np.any((guess < 0) | (guess > m)):
+            raise ValueError(f"guess = {guess.tolist()!r} is invalid: expected one index in [0, {m}] per load.")
+    reach = np.ones((k, 2), int)  # the next outward step below / above the predicted boundary
     whole = np.zeros(k, bool)  # columns run whole after a failed run
     outputs: dict[str, np.ndarray] = {}
     ran = np.zeros((k, m), bool)
     meta, rounds = None, 0
+    spec = resolved(spec, {"dF": dF, "amplitude": v0})
+    chunk_size = k if chunk_size is None else chunk_size
     while True:
         open_ = [i for i in range(k) if hi[i] - lo[i] > 1 and not whole[i]]
-        cells = [(i, (lo[i] + hi[i]) // 2) for i in open_]
+        cells = [(i, _next_cell(lo[i], hi[i], m, None if guess is None else guess[i], reach[i])) for i in open_]
         if not cells:  # last: every cell not yet run of the columns to be run whole
             cells = [(i, j) for i in np.flatnonzero(whole) for j in range(m) if not ran[i, j]]
             if not cells:
@@ -56,9 +72,8 @@ def search_columns(spec: SweepSpec, dF, v0, *, path: str | None = None, progress
         where = None if path is None else f"{path}_round{rounds}"
         res = sweep(spec, {"dF": dF[[i for i, _ in cells]], "amplitude": v0[[j for _, j in cells]]}, combine="zip",
                     path=where, progress=progress, chunk_size=chunk_size)
-        if meta is None:  # every later round at the first round's size and step (its largest load is the grid's)
+        if meta is None:
             meta = dict(res.meta)
-            spec = dataclasses.replace(spec, n=meta["n"], dt=meta["dt"])
             for name, a in res.outputs.items():
                 outputs[name] = np.zeros((k, m), a.dtype)
         for q, (i, j) in enumerate(cells):
@@ -84,3 +99,21 @@ def search_columns(spec: SweepSpec, dF, v0, *, path: str | None = None, progress
     inputs = {"dF": grid_dF.reshape(-1), "amplitude": grid_v0.reshape(-1), "index": np.arange(k * m)}
     meta.update(shape=[k, m], rounds=rounds, runs=int(ran.sum()), fill="search")
     return SweepResult(inputs, {name: a.reshape(-1) for name, a in outputs.items()}, (k, m), ("dF", "amplitude"), meta)
+
+
+def _next_cell(lo: int, hi: int, m: int, guess: int | None, reach) -> int:
+    """The next cell of a column whose highest stable run is `lo` (−1: none) and lowest buckled run
+    `hi` (`m`: none): bisection without a guess or once both are known; else the guessed cell
+    (its top cell where none is guessed to buckle) first, then outward from the side known, by
+    `reach` (below, above), which doubles each time it is used."""
+    if guess is None or (lo >= 0 and hi < m):
+        return (lo + hi) // 2
+    if lo < 0 and hi == m:
+        return min(guess, m - 1)
+    if hi == m:  # stable so far: up
+        j = min(lo + reach[1], m - 1)
+        reach[1] *= 2
+        return j
+    j = max(hi - reach[0], 0)  # buckled so far: down
+    reach[0] *= 2
+    return j

@@ -94,8 +94,10 @@ def stability_map(
 
     `fill`: `"grid"` runs every cell; `"search"` finds each column's boundary by bisection over
     the grid's amplitudes and labels the cells it did not run from it ([`jaxrod.map_columns`][]:
-    right where every column is monotone; map.csv's `ran` says which cells ran); default: the
-    model's (`map_fill`: the 3D rod searches, the others fill the grid).
+    right where every column is monotone; map.csv's `ran` says which cells ran), each column
+    starting from the boundary of the model's `map_guide` where it has one (the 3D rod: the field
+    model's map, searched, under `out`/`sweep_mu<μ>_field`); default: the model's (`map_fill`: the
+    3D rod searches, the others fill the grid).
 
     **Returns:** the summary (per μ: boundary points, fitted exponent ± standard error, the
     largest stable ΔF/F⁰_cr seen, counts), also written to `map.json`.
@@ -150,12 +152,17 @@ def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size, fill=
     starts = [j for j in range(len(dF)) if j == 0 or keys[j] != keys[j - 1]]
     if len(starts) > 1 and n is None:
         n = cls.default_size(rod, F0 + float(dF.max()), pert)
+    guess = None
+    if fill == "search" and cls.map_guide is not None:
+        guess = _guess(cls.map_guide, mu, dF, v0, mode, None if path is None else f"{path}_{cls.map_guide}", progress,
+                       chunk_size)
     parts, groups = [], []
     for a, b in zip(starts, starts[1:] + [len(dF)]):
         spec = SweepSpec(model=model, perturbation="sine", mu=mu, mode=mode, n=n, t1=t1)
         where = path if (a == 0 or path is None) else f"{path}_dF{dF[a]:g}"
         if fill == "search":
-            part = search_columns(spec, dF[a:b], v0, path=where, progress=progress, chunk_size=chunk_size)
+            part = search_columns(spec, dF[a:b], v0, guess=None if guess is None else guess[a:b], path=where,
+                                  progress=progress, chunk_size=chunk_size)
         else:
             part = sweep(spec, {"dF": dF[a:b], "amplitude": v0}, path=where, progress=progress, chunk_size=chunk_size)
         parts.append(part)
@@ -164,6 +171,18 @@ def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size, fill=
     res = parts[0] if len(parts) == 1 else _join_columns(parts, (len(dF), len(v0)))
     res.meta["schemes"] = groups
     return res
+
+
+def _guess(guide, mu, dF, v0, mode, path, progress, chunk_size) -> np.ndarray:
+    """Per column of the grid, the first buckled cell (len(v0): none) of the `guide` model's map
+    (a recipe's `map_guide`), its columns searched, at its default size and horizon: where a
+    costlier model's column search starts (the 3D rod's E3 boundary lies near the field model's:
+    docs/rod3d.md)."""
+    if progress:
+        print(f"  mu = {mu:g}: the {guide} model's map first, to start each column's search", flush=True)
+    spec = SweepSpec(model=guide, perturbation="sine", mu=mu, mode=mode, t1=recipe(guide).search_horizon)
+    b = search_columns(spec, dF, v0, path=path, progress=progress, chunk_size=chunk_size).grid("buckled")
+    return np.where(b.any(axis=1), b.argmax(axis=1), len(v0))
 
 
 def _join_columns(parts, shape) -> SweepResult:

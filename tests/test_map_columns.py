@@ -20,35 +20,50 @@ def _stand_in(boundary, fail=()):
     def fake(spec, inputs, combine, path, progress, chunk_size):
         assert combine == "zip"
         dF, v0 = np.asarray(inputs["dF"]), np.asarray(inputs["amplitude"])
-        calls.append((spec, list(zip(dF.tolist(), v0.tolist())), path))
+        calls.append((spec, list(zip(dF.tolist(), v0.tolist())), path, chunk_size))
         b = np.array([v >= boundary[d] for d, v in zip(dF, v0)])
         res = np.array([1 if (d, v) in fail else 0 for d, v in zip(dF, v0)])
         t = np.where(b, 0.1, math.inf)
         out = dict(buckled=b, t_buckle=t, dominant_mode=np.full(len(b), 6), max_theta=np.where(b, 0.3, 0.01),
                    final_theta=np.where(b, 0.3, 0.0), stuck=~b, t_stop=np.where(b, 0.1, 0.4), result=res)
         return jr.SweepResult({"dF": dF, "amplitude": v0, "index": np.arange(len(b))}, out, (len(b),),
-                              ("dF", "amplitude"), {"n": 12, "dt": 1e-4 * (1 + len(calls)), "shape": [len(b)]})
+                              ("dF", "amplitude"), {"n": spec.n, "dt": spec.dt, "shape": [len(b)]})
 
     return fake, calls
 
 
-def test_each_column_is_bisected_and_the_rest_labelled_from_its_boundary(monkeypatch):
+@pytest.fixture
+def _resolution(monkeypatch):
+    """The grid's resolution, as `jaxrod.sweeps.resolved` would give it (12 segments, 1e-4 s),
+    recorded with the inputs it was asked for."""
+    asked = []
+
+    def fake(spec, inputs, combine="grid"):
+        asked.append({k: np.asarray(v).tolist() for k, v in inputs.items()})
+        return jr.SweepSpec(**{**spec.__dict__, "n": 12, "dt": 1e-4})
+
+    monkeypatch.setattr(mc, "resolved", fake)
+    return asked
+
+
+def test_each_column_is_bisected_and_the_rest_labelled_from_its_boundary(monkeypatch, _resolution):
     """Three columns of 8 amplitudes (1..8) with boundaries at 3.5 (the first buckled cell 4: index
     3), 0 (all buckle) and 100 (none does): bisection between −1 and 8 (amplitudes 4, 2, 3 for the
     first; 4, 2, 1 for the second; 4, 6, 7, 8 for the third) labels every cell as the full grid
-    would, in 4 rounds of at most 3 runs (10 runs for 24 cells); every later round runs at the
-    first round's size and step; the cells that ran keep their runs' numbers, the others NaN times,
-    mode −1, not stuck, result 0."""
+    would, in 4 rounds of at most 3 runs (10 runs for 24 cells); every round runs at the whole
+    grid's size and step, in chunks of 3 (the loads: one compiled program for every round); the
+    cells that ran keep their runs' numbers, the others NaN times, mode −1, not stuck, result 0."""
     fake, calls = _stand_in({1.0: 3.5, 2.0: 0.0, 3.0: 100.0})
     monkeypatch.setattr(mc, "sweep", fake)
     v0 = np.arange(1.0, 9.0)
     res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0, 3.0], v0, path="p", progress=False)
     assert res.shape == (3, 8) and res.names == ("dF", "amplitude")
     assert res.grid("buckled").tolist() == [[v >= 3.5 for v in v0], [True] * 8, [False] * 8]
-    assert [m for _, m, _ in calls] == [[(1.0, 4.0), (2.0, 4.0), (3.0, 4.0)], [(1.0, 2.0), (2.0, 2.0), (3.0, 6.0)],
-                                        [(1.0, 3.0), (2.0, 1.0), (3.0, 7.0)], [(3.0, 8.0)]]
-    assert [p for _, _, p in calls] == ["p_round0", "p_round1", "p_round2", "p_round3"]
-    assert calls[0][0].dt is None and all((s.n, s.dt) == (12, 2e-4) for s, _, _ in calls[1:])
+    assert [m for _, m, _, _ in calls] == [[(1.0, 4.0), (2.0, 4.0), (3.0, 4.0)], [(1.0, 2.0), (2.0, 2.0), (3.0, 6.0)],
+                                           [(1.0, 3.0), (2.0, 1.0), (3.0, 7.0)], [(3.0, 8.0)]]
+    assert [p for _, _, p, _ in calls] == ["p_round0", "p_round1", "p_round2", "p_round3"]
+    assert all((s.n, s.dt, c) == (12, 1e-4, 3) for s, _, _, c in calls)
+    assert _resolution == [{"dF": [1.0, 2.0, 3.0], "amplitude": v0.tolist()}]
     ran = res.grid("ran")
     assert ran.sum() == 10 and res.meta["runs"] == 10 and res.meta["rounds"] == 4 and res.meta["fill"] == "search"
     assert ran[0].tolist() == [False, True, True, True, False, False, False, False]
@@ -58,7 +73,31 @@ def test_each_column_is_bisected_and_the_rest_labelled_from_its_boundary(monkeyp
     assert res.inputs["amplitude"].tolist() == list(v0) * 3 and res.inputs["index"].tolist() == list(range(24))
 
 
-def test_a_column_with_a_failed_run_is_run_whole_and_bad_amplitudes_are_refused(monkeypatch):
+def test_a_guessed_boundary_takes_two_runs_a_column_and_any_guess_labels_every_cell_right(monkeypatch, _resolution):
+    """From the exact guess: the guessed cell, then its neighbour across the boundary (2 runs; 1
+    where the whole column buckles or none of it does). From every guess 0..8 for every boundary
+    0..8 (8 amplitudes): the labels of the full grid; at most 2 runs from the exact guess, and
+    never more than 2 + 2·log₂(8) from any. A guess out of [0, 8] or of another length is refused."""
+    v0 = np.arange(1.0, 9.0)
+    fake, calls = _stand_in({1.0: 3.5, 2.0: 0.0, 3.0: 100.0})
+    monkeypatch.setattr(mc, "sweep", fake)
+    res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0, 3.0], v0, guess=[3, 0, 8], progress=False)
+    assert [m for _, m, _, _ in calls] == [[(1.0, 4.0), (2.0, 1.0), (3.0, 8.0)], [(1.0, 3.0)]]
+    assert res.grid("buckled").tolist() == [[v >= 3.5 for v in v0], [True] * 8, [False] * 8]
+    for first in range(9):  # the first buckled cell
+        for g in range(9):
+            fake, calls = _stand_in({1.0: first + 0.5})
+            monkeypatch.setattr(mc, "sweep", fake)
+            res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0], v0, guess=[g], progress=False)
+            assert res.grid("buckled")[0].tolist() == [j >= first for j in range(8)], (first, g)
+            runs = int(res.grid("ran").sum())
+            assert runs <= (2 if g == first else 8) and (g != first or first in (0, 8) or runs == 2), (first, g, runs)
+    for bad in ([9, 0], [0]):
+        with pytest.raises(ValueError, match=r"guess = \[.*\] is invalid: expected one index in \[0, 8\] per load"):
+            mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0], v0, guess=bad, progress=False)
+
+
+def test_a_column_with_a_failed_run_is_run_whole_and_bad_amplitudes_are_refused(monkeypatch, _resolution):
     fake, calls = _stand_in({1.0: 3.5, 2.0: 3.5}, fail={(2.0, 3.0)})
     monkeypatch.setattr(mc, "sweep", fake)
     res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0], np.arange(1.0, 9.0), progress=False)

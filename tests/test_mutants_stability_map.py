@@ -352,6 +352,8 @@ def test_a_map_runs_to_its_models_search_horizon_unless_given_one(monkeypatch):
 
     monkeypatch.setattr(sm, "sweep", fake("grid"))
     monkeypatch.setattr(mc, "sweep", fake("search"))
+    guided = []
+    monkeypatch.setattr(sm, "_guess", lambda guide, mu, dF, v0, *a: guided.append((guide, mu)) or np.zeros(len(dF), int))
     for model, t1 in (("field", None), ("rod3d", None), ("rod3d", 1.0)):
         with pytest.raises(Stop):
             sm.stability_map((0.3,), model=model, out=None, progress=False, t1=t1)
@@ -359,6 +361,7 @@ def test_a_map_runs_to_its_models_search_horizon_unless_given_one(monkeypatch):
         sm.stability_map((0.3,), model="rod3d", out=None, progress=False, fill="grid")
     assert seen == [("field", 2.0, "grid", "grid"), ("rod3d", 0.4, "search", "zip"), ("rod3d", 1.0, "search", "zip"),
                     ("rod3d", 0.4, "grid", "grid")]
+    assert guided == [("field", 0.3)] * 2  # the 3D rod's searched maps start from the field model's; the filled one does not
 
 
 def test_rod3d_map_runs_the_columns_past_the_wrinkling_load_with_the_explicit_scheme(monkeypatch, tmp_path):

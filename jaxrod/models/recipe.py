@@ -47,6 +47,8 @@ class AbstractRecipe(eqx.Module):
     # how `jaxrod.stability_map` fills its grid: `"grid"` runs every cell, `"search"` finds each
     # column's boundary by bisection and labels the rest (`jaxrod.map_columns`)
     map_fill: ClassVar[str] = "grid"
+    # the cheaper model whose map starts each searched column (`None`: plain bisection)
+    map_guide: ClassVar[str | None] = None
 
     @abc.abstractmethod
     def build(self, rod, F, size: int | None, mode: int):

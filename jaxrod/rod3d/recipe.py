@@ -28,6 +28,7 @@ class Rod3DRecipe(AbstractRecipe):
     search_horizon: ClassVar[float] = 0.4  # E3's brackets keep their labels to 2 s (benchmarks/rod3d_commands.py)
     sweep_lanes: ClassVar[int] = 1  # a lane per core: its steps are large enough to fill one
     map_fill: ClassVar[str] = "search"  # its map's columns are monotone, and a cell costs seconds (docs/rod3d.md)
+    map_guide: ClassVar[str | None] = "field"  # its E3 boundary lies near the field model's (docs/rod3d.md)
     default_segments: ClassVar[int] = 60
 
     def build(self, rod, F, size, mode) -> Rod3D:
