@@ -34,11 +34,11 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = No
     (default: the number of loads), so that all rounds share one compiled program.
 
     `guess`: per column the index of its predicted first buckled cell (0 to len(v0), len(v0):
-    none buckles; e.g. a cheaper model's map). The column's first run is that cell (the top cell
-    where none is predicted to buckle), its next the cell beside it on the other side of the
-    predicted boundary, and so on outward at steps 1, 2, 4, … until a stable and a buckled cell
-    bracket the boundary, then bisection between them: two runs a column where the guess is right,
-    one where it says the whole column buckles (or none of it does) and it does.
+    none buckles; e.g. a cheaper model's map). The column's first round runs the two cells either
+    side of the predicted boundary side by side (one where it says the whole column buckles, or
+    none of it does), the next rounds one cell outward at steps 1, 2, 4, … until a stable and a
+    buckled cell bracket the boundary, then bisection between them: one round and two runs a
+    column where the guess is right. Chunks of twice the column count by default.
 
     **Returns:** a `SweepResult` of shape (len(dF), len(v0)) whose outputs are the runs' where a
     cell ran and, where it did not, the label its column implies (`buckled`; `result` successful;
@@ -59,10 +59,10 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = No
     ran = np.zeros((k, m), bool)
     meta, rounds = None, 0
     spec = resolved(spec, {"dF": dF, "amplitude": v0})
-    chunk_size = k if chunk_size is None else chunk_size
+    chunk_size = (k if guess is None else 2 * k) if chunk_size is None else chunk_size
     while True:
         open_ = [i for i in range(k) if hi[i] - lo[i] > 1 and not whole[i]]
-        cells = [(i, _next_cell(lo[i], hi[i], m, None if guess is None else guess[i], reach[i])) for i in open_]
+        cells = [(i, j) for i in open_ for j in _next_cells(lo[i], hi[i], m, None if guess is None else guess[i], reach[i])]
         if not cells:  # last: every cell not yet run of the columns to be run whole
             cells = [(i, j) for i in np.flatnonzero(whole) for j in range(m) if not ran[i, j]]
             if not cells:
@@ -101,19 +101,20 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = No
     return SweepResult(inputs, {name: a.reshape(-1) for name, a in outputs.items()}, (k, m), ("dF", "amplitude"), meta)
 
 
-def _next_cell(lo: int, hi: int, m: int, guess: int | None, reach) -> int:
-    """The next cell of a column whose highest stable run is `lo` (−1: none) and lowest buckled run
-    `hi` (`m`: none): bisection without a guess or once both are known; else the guessed cell
-    (its top cell where none is guessed to buckle) first, then outward from the side known, by
-    `reach` (below, above), which doubles each time it is used."""
+def _next_cells(lo: int, hi: int, m: int, guess: int | None, reach) -> list[int]:
+    """The next cells of a column whose highest stable run is `lo` (−1: none) and lowest buckled run
+    `hi` (`m`: none): bisection without a guess or once both are known; else first the two
+    cells either side of the guessed boundary (the guessed first buckled cell and the one below
+    it, where they exist), then one cell outward from the side known, by `reach` (below, above),
+    which doubles each time it is used."""
     if guess is None or (lo >= 0 and hi < m):
-        return (lo + hi) // 2
+        return [(lo + hi) // 2]
     if lo < 0 and hi == m:
-        return min(guess, m - 1)
+        return [j for j in (guess - 1, guess) if 0 <= j < m]
     if hi == m:  # stable so far: up
         j = min(lo + reach[1], m - 1)
         reach[1] *= 2
-        return j
+        return [j]
     j = max(hi - reach[0], 0)  # buckled so far: down
     reach[0] *= 2
-    return j
+    return [j]

@@ -74,15 +74,17 @@ def test_each_column_is_bisected_and_the_rest_labelled_from_its_boundary(monkeyp
 
 
 def test_a_guessed_boundary_takes_two_runs_a_column_and_any_guess_labels_every_cell_right(monkeypatch, _resolution):
-    """From the exact guess: the guessed cell, then its neighbour across the boundary (2 runs; 1
-    where the whole column buckles or none of it does). From every guess 0..8 for every boundary
-    0..8 (8 amplitudes): the labels of the full grid; at most 2 runs from the exact guess, and
-    never more than 2 + 2·log₂(8) from any. A guess out of [0, 8] or of another length is refused."""
+    """From the exact guess: the two cells either side of the guessed boundary in one round (2
+    runs; 1 where the whole column buckles or none of it does), in chunks of twice the column
+    count. From every guess 0..8 for every boundary 0..8 (8 amplitudes): the labels of the full
+    grid; one round and at most 2 runs from the exact guess. A guess out of [0, 8] or of another
+    length is refused."""
     v0 = np.arange(1.0, 9.0)
     fake, calls = _stand_in({1.0: 3.5, 2.0: 0.0, 3.0: 100.0})
     monkeypatch.setattr(mc, "sweep", fake)
     res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0, 3.0], v0, guess=[3, 0, 8], progress=False)
-    assert [m for _, m, _, _ in calls] == [[(1.0, 4.0), (2.0, 1.0), (3.0, 8.0)], [(1.0, 3.0)]]
+    assert [m for _, m, _, _ in calls] == [[(1.0, 3.0), (1.0, 4.0), (2.0, 1.0), (3.0, 8.0)]]
+    assert [c for _, _, _, c in calls] == [6]
     assert res.grid("buckled").tolist() == [[v >= 3.5 for v in v0], [True] * 8, [False] * 8]
     for first in range(9):  # the first buckled cell
         for g in range(9):
@@ -92,6 +94,7 @@ def test_a_guessed_boundary_takes_two_runs_a_column_and_any_guess_labels_every_c
             assert res.grid("buckled")[0].tolist() == [j >= first for j in range(8)], (first, g)
             runs = int(res.grid("ran").sum())
             assert runs <= (2 if g == first else 8) and (g != first or first in (0, 8) or runs == 2), (first, g, runs)
+            assert g != first or len(calls) == 1, (first, g)
     for bad in ([9, 0], [0]):
         with pytest.raises(ValueError, match=r"guess = \[.*\] is invalid: expected one index in \[0, 8\] per load"):
             mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0], v0, guess=bad, progress=False)
