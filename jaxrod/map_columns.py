@@ -62,7 +62,10 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = No
     chunk_size = (k if guess is None else 2 * k) if chunk_size is None else chunk_size
     while True:
         open_ = [i for i in range(k) if hi[i] - lo[i] > 1 and not whole[i]]
-        cells = [(i, j) for i in open_ for j in _next_cells(lo[i], hi[i], m, None if guess is None else guess[i], reach[i])]
+        per = [[(i, j) for j in _next_cells(lo[i], hi[i], m, None if guess is None else guess[i], reach[i])] for i in open_]
+        # each column's first cells, then its second: a sweep deals its members to the devices in
+        # turn, and a pair's lower cell (stable, run to the horizon) is the longer run
+        cells = [c[r] for r in range(2) for c in per if r < len(c)]
         if not cells:  # last: every cell not yet run of the columns to be run whole
             cells = [(i, j) for i in np.flatnonzero(whole) for j in range(m) if not ran[i, j]]
             if not cells:

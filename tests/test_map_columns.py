@@ -83,7 +83,7 @@ def test_a_guessed_boundary_takes_two_runs_a_column_and_any_guess_labels_every_c
     fake, calls = _stand_in({1.0: 3.5, 2.0: 0.0, 3.0: 100.0})
     monkeypatch.setattr(mc, "sweep", fake)
     res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0, 3.0], v0, guess=[3, 0, 8], progress=False)
-    assert [m for _, m, _, _ in calls] == [[(1.0, 3.0), (1.0, 4.0), (2.0, 1.0), (3.0, 8.0)]]
+    assert [m for _, m, _, _ in calls] == [[(1.0, 3.0), (2.0, 1.0), (3.0, 8.0), (1.0, 4.0)]]  # first cells, then second
     assert [c for _, _, _, c in calls] == [6]
     assert res.grid("buckled").tolist() == [[v >= 3.5 for v in v0], [True] * 8, [False] * 8]
     for first in range(9):  # the first buckled cell
