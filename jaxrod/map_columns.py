@@ -25,13 +25,16 @@ from .sweeps import SweepResult, SweepSpec, resolved, sweep
 __all__ = ["search_columns"]
 
 
-def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = None, progress: bool = True,
-                   chunk_size: int | None = None) -> SweepResult:
+def search_columns(spec: SweepSpec, dF, v0, *, guess=None, fixed: dict | None = None, path: str | None = None,
+                   progress: bool = True, chunk_size: int | None = None) -> SweepResult:
     """The grid `dF` × `v0` of `spec`'s sweep (as `sweep(spec, {"dF": dF, "amplitude": v0})`
     gives it) with each column's boundary found by bisection (module docstring). `v0` ascending.
     Round r's sweep is written under `path` + `_round<r>` (resumable as any sweep). Every round
     runs at the whole grid's size and step (`jaxrod.sweeps.resolved`) in chunks of `chunk_size`
     (default: the number of loads), so that all rounds share one compiled program.
+
+    `fixed`: sweep inputs given to every run (e.g. `{"mu": 0.05}`): searches that differ only in
+    them share one spec, and so one compiled program.
 
     `guess`: per column the index of its predicted first buckled cell (0 to len(v0), len(v0):
     none buckles; e.g. a cheaper model's map). The column's first round runs the two cells either
@@ -58,7 +61,8 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = No
     outputs: dict[str, np.ndarray] = {}
     ran = np.zeros((k, m), bool)
     meta, rounds = None, 0
-    spec = resolved(spec, {"dF": dF, "amplitude": v0})
+    fixed = dict(fixed or {})
+    spec = resolved(spec, {"dF": dF, "amplitude": v0, **fixed})
     chunk_size = (k if guess is None else 2 * k) if chunk_size is None else chunk_size
     while True:
         open_ = [i for i in range(k) if hi[i] - lo[i] > 1 and not whole[i]]
@@ -73,8 +77,8 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, path: str | None = No
         if progress:
             print(f"  column search, round {rounds + 1}: {len(cells)} run(s)", flush=True)
         where = None if path is None else f"{path}_round{rounds}"
-        res = sweep(spec, {"dF": dF[[i for i, _ in cells]], "amplitude": v0[[j for _, j in cells]]}, combine="zip",
-                    path=where, progress=progress, chunk_size=chunk_size)
+        res = sweep(spec, {"dF": dF[[i for i, _ in cells]], "amplitude": v0[[j for _, j in cells]], **fixed},
+                    combine="zip", path=where, progress=progress, chunk_size=chunk_size)
         if meta is None:
             meta = dict(res.meta)
             for name, a in res.outputs.items():

@@ -160,8 +160,9 @@ def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size, fill=
     for a, b in zip(starts, starts[1:] + [len(dF)]):
         spec = SweepSpec(model=model, perturbation="sine", mu=mu, mode=mode, n=n, t1=t1)
         where = path if (a == 0 or path is None) else f"{path}_dF{dF[a]:g}"
-        if fill == "search":
-            part = search_columns(spec, dF[a:b], v0, guess=None if guess is None else guess[a:b], path=where,
+        if fill == "search":  # μ as an input: the maps at every μ share one compiled program per scheme
+            part = search_columns(SweepSpec(model=model, perturbation="sine", mode=mode, n=n, t1=t1), dF[a:b], v0,
+                                  guess=None if guess is None else guess[a:b], fixed={"mu": mu}, path=where,
                                   progress=progress, chunk_size=chunk_size)
         else:
             part = sweep(spec, {"dF": dF[a:b], "amplitude": v0}, path=where, progress=progress, chunk_size=chunk_size)
@@ -180,8 +181,8 @@ def _guess(guide, mu, dF, v0, mode, path, progress, chunk_size) -> np.ndarray:
     docs/rod3d.md)."""
     if progress:
         print(f"  mu = {mu:g}: the {guide} model's map first, to start each column's search", flush=True)
-    spec = SweepSpec(model=guide, perturbation="sine", mu=mu, mode=mode, t1=recipe(guide).search_horizon)
-    b = search_columns(spec, dF, v0, path=path, progress=progress, chunk_size=chunk_size).grid("buckled")
+    spec = SweepSpec(model=guide, perturbation="sine", mode=mode, t1=recipe(guide).search_horizon)
+    b = search_columns(spec, dF, v0, fixed={"mu": mu}, path=path, progress=progress, chunk_size=chunk_size).grid("buckled")
     return np.where(b.any(axis=1), b.argmax(axis=1), len(v0))
 
 

@@ -15,12 +15,13 @@ from jaxrod import stability_map as sm
 def _stand_in(boundary, fail=()):
     """A sweep whose member at (dF, v0) buckles iff v0 >= boundary[dF], fails at the (dF, v0) in
     `fail`; it records the members of each call."""
-    calls = []
+    calls, fixed = [], []
 
     def fake(spec, inputs, combine, path, progress, chunk_size):
         assert combine == "zip"
         dF, v0 = np.asarray(inputs["dF"]), np.asarray(inputs["amplitude"])
         calls.append((spec, list(zip(dF.tolist(), v0.tolist())), path, chunk_size))
+        fixed.append({k: v for k, v in inputs.items() if k not in ("dF", "amplitude")})
         b = np.array([v >= boundary[d] for d, v in zip(dF, v0)])
         res = np.array([1 if (d, v) in fail else 0 for d, v in zip(dF, v0)])
         t = np.where(b, 0.1, math.inf)
@@ -29,6 +30,7 @@ def _stand_in(boundary, fail=()):
         return jr.SweepResult({"dF": dF, "amplitude": v0, "index": np.arange(len(b))}, out, (len(b),),
                               ("dF", "amplitude"), {"n": spec.n, "dt": spec.dt, "shape": [len(b)]})
 
+    fake.fixed = fixed
     return fake, calls
 
 
@@ -82,9 +84,11 @@ def test_a_guessed_boundary_takes_two_runs_a_column_and_any_guess_labels_every_c
     v0 = np.arange(1.0, 9.0)
     fake, calls = _stand_in({1.0: 3.5, 2.0: 0.0, 3.0: 100.0})
     monkeypatch.setattr(mc, "sweep", fake)
-    res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0, 3.0], v0, guess=[3, 0, 8], progress=False)
+    res = mc.search_columns(jr.SweepSpec(model="mode"), [1.0, 2.0, 3.0], v0, guess=[3, 0, 8], fixed={"mu": 0.05},
+                            progress=False)
+    assert _resolution == [{"dF": [1.0, 2.0, 3.0], "amplitude": v0.tolist(), "mu": 0.05}]
     assert [m for _, m, _, _ in calls] == [[(1.0, 3.0), (2.0, 1.0), (3.0, 8.0), (1.0, 4.0)]]  # first cells, then second
-    assert [c for _, _, _, c in calls] == [6]
+    assert [c for _, _, _, c in calls] == [6] and fake.fixed == [{"mu": 0.05}]  # μ reaches every run as an input
     assert res.grid("buckled").tolist() == [[v >= 3.5 for v in v0], [True] * 8, [False] * 8]
     for first in range(9):  # the first buckled cell
         for g in range(9):
