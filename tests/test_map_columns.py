@@ -151,3 +151,28 @@ def test_the_map_command_searches_columns_on_request(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["map", "--fill", "cells"])
     assert "argument --fill: invalid choice: 'cells'" in capsys.readouterr().err
+
+
+def test_the_committed_3d_map_searched_has_the_full_maps_labels_and_the_readme_its_time():
+    """`results/paper/e3/map_rod3d_n500_search/map.csv` (the 3D map as `jaxrod map --model rod3d
+    --n 500` makes it, columns searched) against the map that ran every cell
+    (`map_rod3d_n500.csv`): the same label in each of the 960 cells, the cells it ran as many as
+    `benchmarks/results/rod3d_map_search.json` says, and README's time that file's."""
+    import json
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+
+    def rows(path):
+        with open(path) as fh:
+            return {(round(float(r["mu"]), 6), round(float(r["dF"]), 9), round(float(r["v0"]), 12)): r
+                    for r in csv.DictReader(line for line in fh if not line.startswith("#"))}
+
+    found = rows(root / "results/paper/e3/map_rod3d_n500_search/map.csv")
+    full = rows(root / "results/paper/e3/map_rod3d_n500.csv")
+    assert len(found) == len(full) == 960 and found.keys() == full.keys()
+    assert all(found[k]["buckled"] == full[k]["buckled"] for k in full)
+    record = json.loads((root / "benchmarks/results/rod3d_map_search.json").read_text())
+    assert sum(r["ran"] == "1" for r in found.values()) == sum(record["runs"].values()) == record["ran"]
+    minutes, seconds = divmod(round(record["cold_wall_s"]), 60)
+    assert f"| {minutes} min {seconds} s cold" in (root / "README.md").read_text()
