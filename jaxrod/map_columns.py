@@ -7,9 +7,9 @@ This is the map a column search gives *when every column is monotone* (stable be
 amplitude, buckled from it on), as the E3 maps are (`results/paper/e3/`: every column of the
 field model's and the 3D rod's maps); a column that is not would be labelled wrongly between the
 cells the search ran, so the cells it ran are marked (`ran`) and the full grid stays one option
-away (`stability_map(..., fill="grid")`). Each round runs one cell per unresolved column, all
-columns of a round side by side as one sweep (`combine="zip"`); a column whose run fails is run
-whole. About log₂(amplitudes + 1) runs per column instead of one per cell; from a guess of each
+away (`stability_map(..., fill="grid")`). Each round runs one cell per unresolved column (two in
+a guessed column's first round), all columns of a round side by side as one sweep
+(`combine="zip"`); a column whose run fails is run whole. About log₂(amplitudes + 1) runs per column instead of one per cell; from a guess of each
 column's boundary (a cheaper model's map: `jaxrod.stability_map` guides the 3D rod's by the field
 model's), about two.
 
@@ -31,7 +31,8 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, fixed: dict | None = 
     gives it) with each column's boundary found by bisection (module docstring). `v0` ascending.
     Round r's sweep is written under `path` + `_round<r>` (resumable as any sweep). Every round
     runs at the whole grid's size and step (`jaxrod.sweeps.resolved`) in chunks of `chunk_size`
-    (default: the number of loads), so that all rounds share one compiled program.
+    (default: the number of loads, twice that with a `guess`), so that all rounds share one
+    compiled program.
 
     `fixed`: sweep inputs given to every run (e.g. `{"mu": 0.05}`): searches that differ only in
     them share one spec, and so one compiled program.
@@ -41,7 +42,7 @@ def search_columns(spec: SweepSpec, dF, v0, *, guess=None, fixed: dict | None = 
     side of the predicted boundary side by side (one where it says the whole column buckles, or
     none of it does), the next rounds one cell outward at steps 1, 2, 4, … until a stable and a
     buckled cell bracket the boundary, then bisection between them: one round and two runs a
-    column where the guess is right. Chunks of twice the column count by default.
+    column where the guess is right.
 
     **Returns:** a `SweepResult` of shape (len(dF), len(v0)) whose outputs are the runs' where a
     cell ran and, where it did not, the label its column implies (`buckled`; `result` successful;

@@ -647,6 +647,9 @@ def test_a_pools_given_chunk_size_pads_smaller_sweeps_to_one_program_and_resolve
     compiles = [r.getMessage() for r in caplog.records if r.getMessage().startswith("Compiling jit(run_chunk)")]
     assert len(compiles) == 1, compiles
     assert three.meta["chunk_size"] == 4 and two.meta["chunk_size"] == 4 and plain.meta["chunk_size"] == 3
+    # the padding stays within the memory budget (here one member): never below the members
+    tight = sweep(mode, {"dF": [1.0, 2.0], "amplitude": 0.01}, chunk_size=4, memory_mb=1e-9, progress=False)
+    assert tight.meta["chunk_size"] == 2
     for k in plain.outputs:  # the same labels and steps; numbers to rounding (XLA compiles another width differently)
         same = np.testing.assert_allclose if plain.outputs[k].dtype.kind == "f" else np.testing.assert_array_equal
         kw = dict(rtol=1e-12) if plain.outputs[k].dtype.kind == "f" else {}

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
-import dataclasses
 import math
 import os
 import time
@@ -107,8 +107,9 @@ def sweep(
     - `chunk_size`: members per chunk (rounded up to a multiple of the device count); default
       from `memory_mb`, at most 1024 (larger chunks wait longer for their slowest member). The
       unit of work dealt to the processes of a distributed run. A chunk is cut to the members
-      there are, except a given `chunk_size` under `"pool"`: the chunk is padded to it (the pool
-      never runs the padding), so sweeps of up to that many members share one compiled program.
+      there are, except a given `chunk_size` under `"pool"`: the chunk is padded to it, within
+      `memory_mb` (the pool never runs the padding), so sweeps of up to that many members share
+      one compiled program.
     - `members`: a sub-range of global member indices to run.
     - `progress`: show a progress bar (members, members/s); `on_chunk(c)`: called after
       chunk c is finished (and written).
@@ -162,8 +163,9 @@ def sweep(
     n_dev = jax.local_device_count()
     n_proc = jax.process_count()
     given = chunk_size is not None
+    budget = int(max(1, min(1024, memory_mb * 2**20 // _bytes_per_member(spec, n))))  # members in memory_mb
     if chunk_size is None:
-        chunk_size = int(max(1, min(1024, memory_mb * 2**20 // _bytes_per_member(spec, n))))
+        chunk_size = budget
     if not (isinstance(chunk_size, int) and chunk_size >= 1):
         raise ValueError(f"chunk_size = {chunk_size!r} is invalid: expected an int >= 1.")
     if scheduling not in ("pool", "chunk"):
@@ -177,7 +179,10 @@ def sweep(
         if not (isinstance(val, int) and val >= 1):
             raise ValueError(f"{name} = {val!r} is invalid: expected an int >= 1.")
     index = np.arange(members.start, members.stop)
-    chunk_size = math.ceil((chunk_size if keep else min(chunk_size, len(index))) / n_dev) * n_dev
+    target = min(chunk_size, len(index))
+    if keep:  # padded up to the given size, within the memory budget
+        target = max(target, min(chunk_size, budget))
+    chunk_size = math.ceil(target / n_dev) * n_dev
     sel = {k: v[index] for k, v in flat.items()}
     dtype = str(jnp.result_type(float))
     meta = {
