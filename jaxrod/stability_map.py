@@ -11,7 +11,7 @@ import numpy as np
 from . import theory
 from .output import subplots, write_csv
 from .params import RodChannel
-from .registry import make_perturbation, recipe
+from .registry import make_perturbation, name_of, recipe
 from .map_columns import search_columns
 from .sweeps import SweepResult, SweepSpec, sweep
 
@@ -114,7 +114,7 @@ def stability_map(
     dF = np.asarray(dF, float)
     v0 = np.asarray(v0, float)
     results = {}
-    summary = {"model": model, "mode": mode, "t1": t1, "dF": dF.tolist(), "v0": v0.tolist(), "maps": {}}
+    summary = {"model": name_of(model), "mode": mode, "t1": t1, "dF": dF.tolist(), "v0": v0.tolist(), "maps": {}}
     for mu in mus:
         path = None if out is None else os.path.join(out, f"sweep_mu{mu:g}")
         res = _map_sweep(float(mu), dF, v0, model, n, mode, t1, path, progress, chunk_size, fill)

@@ -176,3 +176,28 @@ def test_the_committed_3d_map_searched_has_the_full_maps_labels_and_the_readme_i
     assert sum(r["ran"] == "1" for r in found.values()) == sum(record["runs"].values()) == record["ran"]
     minutes, seconds = divmod(round(record["cold_wall_s"]), 60)
     assert f"| {minutes} min {seconds} s cold" in (root / "README.md").read_text()
+
+
+def test_a_map_guided_by_another_models_map_labels_every_cell_as_the_filled_map(tmp_path):
+    """A recipe with a `map_guide` (the single mode guided by the field model's map, searched at
+    its own size and horizon): the searched map, every column starting at the guide's boundary,
+    has the filled map's label in every cell, from at most two runs a column where the guide is
+    right, and writes the guide's map beside its own (`sweep_mu0.3_field_round0`); map.json names
+    the recipe (it held the object, which JSON cannot write)."""
+    from typing import ClassVar
+
+    from jaxrod.models.single_mode import SingleModeRecipe
+
+    class Guided(SingleModeRecipe):
+        map_guide: ClassVar[str | None] = "field"
+
+    dF, v0 = [1.0, 4.0, 16.0], np.geomspace(2e-3, 0.2, 9).tolist()
+    full = sm.stability_map(mus=(0.3,), dF=dF, v0=v0, model="mode", out=str(tmp_path / "grid"), progress=False,
+                            t1=0.5, fill="grid")
+    found = sm.stability_map(mus=(0.3,), dF=dF, v0=v0, model=Guided(), out=str(tmp_path / "search"), progress=False,
+                             t1=0.5, fill="search", curve_rtol=None)
+    a, b = full["maps"]["0.3"], found["maps"]["0.3"]
+    assert (a["buckled"], a["stable"]) == (b["buckled"], b["stable"]) and a["boundary_v0"] == b["boundary_v0"]
+    assert found["fill"]["runs"]["0.3"] <= 10  # the plain bisection's count on this grid (the test above)
+    assert (tmp_path / "search" / "sweep_mu0.3_field_round0").is_dir()
+    assert found["model"] == "Guided"  # an unregistered recipe is named by its class in map.json
