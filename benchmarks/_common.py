@@ -141,6 +141,20 @@ def commit(root: str = os.path.dirname(os.path.dirname(os.path.abspath(__file__)
     return out.stdout.strip() + ("+changes" if dirty else "")
 
 
+def jaxrod_command(argv, cache: str, root: str = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))):
+    """`jaxrod ARGV` in a fresh process (`python -m jaxrod`, from `root`) with the compilation cache
+    folder `cache`: (wall seconds, stdout); a failed command stops the benchmark with its error."""
+    import sys
+
+    env = dict(os.environ, JAXROD_CACHE_DIR=cache)
+    t = time.perf_counter()
+    out = subprocess.run([sys.executable, "-m", "jaxrod", *argv], capture_output=True, text=True, env=env, cwd=root)
+    seconds = time.perf_counter() - t
+    if out.returncode:
+        raise SystemExit(f"jaxrod {' '.join(argv)} failed:\n{out.stderr[-2000:]}")
+    return seconds, out.stdout
+
+
 def device_info(dtype="float64") -> dict:
     """The device, JAX version and dtype a result was measured with (as CSV columns)."""
     import jax

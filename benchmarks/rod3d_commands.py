@@ -18,12 +18,10 @@ import datetime
 import json
 import os
 import platform
-import subprocess
-import sys
 import tempfile
 import time
 
-from _common import commit  # noqa: E402
+from _common import commit, jaxrod_command  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXPLICIT = os.path.join(ROOT, "results", "paper", "e3", "rod3d_boundary_n500_leapfrog.csv")
@@ -32,13 +30,8 @@ EXPLICIT = os.path.join(ROOT, "results", "paper", "e3", "rod3d_boundary_n500_lea
 
 def _command(argv, cache):
     """`jaxrod ARGV` in a fresh process with the compilation cache folder `cache`: (seconds, JSON)."""
-    env = dict(os.environ, JAXROD_CACHE_DIR=cache)
-    t = time.perf_counter()
-    out = subprocess.run([sys.executable, "-m", "jaxrod", *argv], capture_output=True, text=True, env=env, cwd=ROOT)
-    seconds = time.perf_counter() - t
-    if out.returncode:
-        raise SystemExit(f"jaxrod {' '.join(argv)} failed:\n{out.stderr[-2000:]}")
-    return seconds, json.loads(out.stdout.strip().splitlines()[-1])
+    seconds, out = jaxrod_command(argv, cache, ROOT)
+    return seconds, json.loads(out.strip().splitlines()[-1])
 
 
 def _explicit(n):

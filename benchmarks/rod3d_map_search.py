@@ -21,12 +21,9 @@ import json
 import os
 import platform
 import shutil
-import subprocess
-import sys
 import tempfile
-import time
 
-from _common import commit  # noqa: E402
+from _common import commit, jaxrod_command  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 FULL = os.path.join(ROOT, "results", "paper", "e3", "map_rod3d_n500.csv")
@@ -50,14 +47,9 @@ def main():
     for old in glob.glob(os.path.join(folder, "sweep_*")):
         shutil.rmtree(old)
     with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, JAXROD_CACHE_DIR=cache)
-        t = time.perf_counter()
-        out = subprocess.run([sys.executable, "-m", "jaxrod", *argv], capture_output=True, text=True, env=env, cwd=ROOT)
-        wall = time.perf_counter() - t
-    if out.returncode:
-        raise SystemExit(f"jaxrod {' '.join(argv)} failed:\n{out.stderr[-2000:]}")
+        wall, stdout = jaxrod_command(argv, cache, ROOT)
     with open(os.path.join(folder, "map.log"), "w") as fh:
-        fh.write(f"$ jaxrod {' '.join(argv)}\n{out.stdout}")
+        fh.write(f"$ jaxrod {' '.join(argv)}\n{stdout}")
     summary = json.load(open(os.path.join(folder, "map.json")))
     found = _labels(os.path.join(folder, "map.csv"))
     record = dict(command="jaxrod " + " ".join(argv), commit=at, date=datetime.date.today().isoformat(),

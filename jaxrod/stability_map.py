@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -158,14 +159,14 @@ def _map_sweep(mu, dF, v0, model, n, mode, t1, path, progress, chunk_size, fill=
                        chunk_size)
     parts, groups = [], []
     for a, b in zip(starts, starts[1:] + [len(dF)]):
-        spec = SweepSpec(model=model, perturbation="sine", mu=mu, mode=mode, n=n, t1=t1)
+        spec = SweepSpec(model=model, perturbation="sine", mode=mode, n=n, t1=t1)
         where = path if (a == 0 or path is None) else f"{path}_dF{dF[a]:g}"
         if fill == "search":  # μ as an input: the maps at every μ share one compiled program per scheme
-            part = search_columns(SweepSpec(model=model, perturbation="sine", mode=mode, n=n, t1=t1), dF[a:b], v0,
-                                  guess=None if guess is None else guess[a:b], fixed={"mu": mu}, path=where,
-                                  progress=progress, chunk_size=chunk_size)
+            part = search_columns(spec, dF[a:b], v0, guess=None if guess is None else guess[a:b], fixed={"mu": mu},
+                                  path=where, progress=progress, chunk_size=chunk_size)
         else:
-            part = sweep(spec, {"dF": dF[a:b], "amplitude": v0}, path=where, progress=progress, chunk_size=chunk_size)
+            part = sweep(dataclasses.replace(spec, mu=mu), {"dF": dF[a:b], "amplitude": v0}, path=where,
+                         progress=progress, chunk_size=chunk_size)
         parts.append(part)
         groups.append({"dF_first": float(dF[a]), "dF_last": float(dF[b - 1]), "scheme": part.meta["scheme"],
                        "dt": part.meta["dt"]})
